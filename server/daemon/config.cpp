@@ -1,0 +1,99 @@
+#include "server/daemon/config.h"
+
+#include <cmath>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include "server/common/check.h"
+
+namespace sim4cv::daemon {
+namespace {
+
+template <typename T>
+T ParseNumber(const std::string& flag, const std::string& text, T low, T high) {
+  std::istringstream in(text);
+  T value{};
+  in >> value;
+  SIM4CV_THROW_UNLESS(in && in.eof(), flag << " expects a number, got '" << text << "'");
+  SIM4CV_THROW_UNLESS(value >= low && value <= high, flag << " is " << text << "; it must be in [" << low << ", " << high << "]");
+  return value;
+}
+
+}  // namespace
+
+uint32_t Config::substeps_per_frame() const {
+  const double ratio = physics_hz / frame_hz;
+  return static_cast<uint32_t>(std::lround(ratio));
+}
+
+std::string HelpText() {
+  return R"(sim4cvd: the sim4cv simulation daemon. Steps vehicle physics with Bullet, renders camera
+frames offscreen with OSMesa and serves them to clients (see docs/protocol.md).
+
+Usage: sim4cvd [flags]
+
+  --scene FILE              scene file to load (docs/scenes.md); default: the embedded default scene
+  --seed N                  seed for every random choice of the simulation (default 1)
+  --bind ADDRESS            address the TCP port listens on (default 127.0.0.1; 0.0.0.0 for all)
+  --tcp-port N              TCP port; 0 picks any free port (default 0)
+  --physics-hz N            physics steps per simulated second (default 240)
+  --frame-hz N              frames per simulated second; physics-hz must be a multiple (default 30)
+  --width N, --height N     camera resolution in pixels (default 320 x 180)
+  --mode lockstep|realtime  lockstep: a frame advances when every lockstep client sent Step;
+                            realtime: simulated time follows wall time, newest frame only (default lockstep)
+  --max-message-bytes N     largest Envelope a client may send (default 67108864)
+  --max-clients N           most simultaneous connections (default 64)
+  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
+  --help                    this text
+
+When ready it prints one line on stdout: `sim4cvd listening tcp=PORT`.
+SIGINT or SIGTERM end it cleanly.
+)";
+}
+
+std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::string& help_text) {
+  Config config;
+  using Setter = std::function<void(const std::string& flag, const std::string& value)>;
+  const std::map<std::string, Setter> setters = {
+      {"--scene", [&](auto&, auto& v) { config.scene_file = v; }},
+      {"--seed", [&](auto& f, auto& v) { config.seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
+      {"--bind", [&](auto&, auto& v) { config.bind_address = v; }},
+      {"--tcp-port", [&](auto& f, auto& v) { config.tcp_port = ParseNumber<uint16_t>(f, v, 0, 65535); }},
+      {"--physics-hz", [&](auto& f, auto& v) { config.physics_hz = ParseNumber<double>(f, v, 1, 100000); }},
+      {"--frame-hz", [&](auto& f, auto& v) { config.frame_hz = ParseNumber<double>(f, v, 0.1, 1000); }},
+      {"--width", [&](auto& f, auto& v) { config.width = ParseNumber<uint32_t>(f, v, 16, 4096); }},
+      {"--height", [&](auto& f, auto& v) { config.height = ParseNumber<uint32_t>(f, v, 16, 4096); }},
+      {"--mode",
+       [&](auto& f, auto& v) {
+         SIM4CV_THROW_UNLESS(v == "lockstep" || v == "realtime", f << " is '" << v << "'; use lockstep or realtime");
+         config.mode = v == "lockstep" ? proto::SIM_MODE_LOCKSTEP : proto::SIM_MODE_REALTIME;
+       }},
+      {"--max-message-bytes",
+       [&](auto& f, auto& v) { config.max_message_bytes = ParseNumber<uint32_t>(f, v, 16, 1u << 30); }},
+      {"--max-clients", [&](auto& f, auto& v) { config.max_clients = ParseNumber<uint32_t>(f, v, 1, 100000); }},
+      {"--log-level",
+       [&](auto& f, auto& v) {
+         SIM4CV_THROW_UNLESS(v == "debug" || v == "info" || v == "warning" || v == "error",
+                             f << " is '" << v << "'; use debug, info, warning or error");
+         config.log_level = v;
+       }},
+  };
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--help" || args[i] == "-h") {
+      help_text = HelpText();
+      return std::nullopt;
+    }
+    const auto setter = setters.find(args[i]);
+    SIM4CV_THROW_UNLESS(setter != setters.end(), "unknown flag '" << args[i] << "'; see sim4cvd --help");
+    SIM4CV_THROW_UNLESS(i + 1 < args.size(), args[i] << " needs a value; see sim4cvd --help");
+    setter->second(args[i], args[i + 1]);
+    ++i;
+  }
+  const double ratio = config.physics_hz / config.frame_hz;
+  SIM4CV_THROW_UNLESS(std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1,
+                      "--physics-hz " << config.physics_hz << " must be a whole multiple of --frame-hz " << config.frame_hz);
+  return config;
+}
+
+}  // namespace sim4cv::daemon

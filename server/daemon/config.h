@@ -1,0 +1,39 @@
+// Every setting of the daemon, with its default, parsed from the command line.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim4cv.pb.h"
+
+namespace sim4cv::daemon {
+
+struct Config {
+  std::string scene_file;  // empty: the embedded default scene
+  uint64_t seed = 1;
+  std::string bind_address = "127.0.0.1";
+  uint16_t tcp_port = 0;
+  double physics_hz = 240.0;
+  double frame_hz = 30.0;
+  uint32_t width = 320;
+  uint32_t height = 180;
+  proto::SimMode mode = proto::SIM_MODE_LOCKSTEP;
+  uint32_t max_message_bytes = 64u << 20;
+  uint32_t max_clients = 64;
+  std::string log_level = "info";
+
+  // Physics steps per frame; physics_hz must be a whole multiple of frame_hz.
+  uint32_t substeps_per_frame() const;
+};
+
+// Parses argv (without the program name). Returns nullopt and fills
+// `help_text` for --help (then exit 0);
+// or throws std::invalid_argument naming the bad flag or value.
+std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::string& help_text);
+
+// The --help text.
+std::string HelpText();
+
+}  // namespace sim4cv::daemon

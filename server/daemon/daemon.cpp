@@ -1,0 +1,91 @@
+#include "server/daemon/daemon.h"
+
+#include <signal.h>
+
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "protocol/framing.h"
+#include "server/common/log.h"
+#include "server/daemon/sim_thread.h"
+#include "server/daemon/state_message.h"
+#include "server/transport/tcp/tcp_transport.h"
+
+namespace sim4cv::daemon {
+namespace {
+
+log::Level ParseLevel(const std::string& name) {
+  if (name == "debug") return log::Level::kDebug;
+  if (name == "warning") return log::Level::kWarning;
+  if (name == "error") return log::Level::kError;
+  return log::Level::kInfo;
+}
+
+proto::Welcome MakeWelcome(const Config& config, const sim::Scene& scene,
+                           const std::vector<std::unique_ptr<transport::Transport>>& transports) {
+  proto::Welcome welcome;
+  welcome.set_protocol_version(wire::kProtocolVersion);
+  welcome.set_server_version(SIM4CV_VERSION);
+  welcome.set_scene_name(scene.name);
+  for (const auto& camera : scene.cameras) {
+    proto::CameraInfo* info = welcome.add_cameras();
+    info->set_name(camera.name);
+    info->set_width(camera.width);
+    info->set_height(camera.height);
+    info->set_fov_y_deg(camera.fov_y_deg);
+    info->set_mounted_on(camera.mounted_on);
+  }
+  for (const auto& t : transports) *welcome.add_transports() = t->info();
+  welcome.set_mode(config.mode);
+  welcome.set_physics_hz(config.physics_hz);
+  welcome.set_frame_hz(config.frame_hz);
+  FillEntityInfos(scene, welcome);
+  return welcome;
+}
+
+}  // namespace
+
+int RunDaemon(const Config& config) {
+  log::SetMinLevel(ParseLevel(config.log_level));
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  signal(SIGPIPE, SIG_IGN);  // a client that vanishes must not kill the daemon
+
+  const sim::Scene scene = config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
+                                                     : sim::LoadSceneFile(config.scene_file, config.width, config.height);
+
+  std::vector<std::unique_ptr<transport::Transport>> transports;
+  transports.push_back(transport::MakeTcpTransport(
+      {config.bind_address, config.tcp_port, config.max_clients, config.max_message_bytes}));
+
+  session::CommandQueue commands;
+  session::LatestState latest_state;
+  const session::ServerContext context{scene, config.mode, MakeWelcome(config, scene, transports), commands,
+                                       latest_state, config.max_message_bytes};
+  SimThread sim(config, scene, commands, latest_state);
+  sim.Start();
+  for (auto& t : transports) t->Start(context);
+
+  std::string line = "sim4cvd listening";
+  for (const auto& t : transports) line += " " + t->listening_field();
+  std::printf("%s\n", line.c_str());
+  std::fflush(stdout);
+  LOG_INFO("scene '" << scene.name << "', " << config.width << "x" << config.height << ", "
+                     << (config.mode == proto::SIM_MODE_LOCKSTEP ? "lockstep" : "realtime") << " mode, renderer "
+                     << sim.renderer_name());
+
+  int signal_number = 0;
+  sigwait(&stop_signals, &signal_number);
+  LOG_INFO("received signal " << signal_number << "; shutting down");
+  sim.Stop();  // no new frames from here on
+  for (auto& t : transports) t->Stop();
+  transports.clear();  // sessions release their frames before the sim's pools go
+  LOG_INFO("stopped cleanly");
+  return 0;
+}
+
+}  // namespace sim4cv::daemon

@@ -1,0 +1,72 @@
+// The one thread that touches Bullet and OpenGL. Per step it drains the
+// command queue, advances physics by a frame's worth of substeps, renders
+// every camera someone subscribed to, and hands the frames to the scheduler.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "server/daemon/config.h"
+#include "server/render/ground_truth.h"
+#include "server/session/command_queue.h"
+#include "server/session/scheduler.h"
+#include "server/session/server_context.h"
+#include "server/sim/world.h"
+
+namespace sim4cv::render {
+class GlContext;
+class Renderer;
+class SceneGraphics;
+}  // namespace sim4cv::render
+
+namespace sim4cv::daemon {
+
+class SimThread {
+ public:
+  SimThread(const Config& config, const sim::Scene& scene, session::CommandQueue& commands,
+            session::LatestState& latest_state);
+  ~SimThread();
+
+  // Starts the thread and waits until its GL context and renderer exist;
+  // rethrows what went wrong there.
+  void Start();
+  // Finishes the current step and joins.
+  void Stop();
+
+  // GL_RENDERER of the context (valid after Start).
+  const std::string& renderer_name() const { return renderer_name_; }
+
+ private:
+  void Run();
+  void RunLockstep();
+  void RunRealtime();
+  void ApplyCommands();
+  void AdvanceFrame();
+  void RenderCamera(uint32_t camera_index);
+  void PublishState();
+
+  const Config config_;
+  const sim::Scene& scene_;
+  session::CommandQueue& commands_;
+  session::LatestState& latest_state_;
+  // Pools first: frames handed out must be returned before the pools go.
+  session::FramePool frame_pool_{4};
+  session::StatePool state_pool_{4};
+  sim::World world_;
+  sim::State state_;
+  session::Scheduler scheduler_;
+  std::vector<session::Command> drained_;
+  std::unique_ptr<render::GlContext> gl_;
+  std::unique_ptr<render::SceneGraphics> graphics_;
+  std::unique_ptr<render::Renderer> renderer_;
+  render::BoxExtractor boxes_;
+  std::vector<uint32_t> unoccluded_pixels_;
+  std::string renderer_name_;
+  std::atomic<bool> running_{false};
+  std::thread thread_;
+};
+
+}  // namespace sim4cv::daemon

@@ -1,0 +1,37 @@
+// Draws a list of mesh instances from one camera into RGB, linear depth and an
+// instance mask in a single pass (multiple render targets), and measures how
+// many pixels each labelled instance would cover if nothing occluded it.
+// Needs a current GL context (see gl_context.h); owns only GL objects.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "server/render/render_types.h"
+
+namespace sim4cv::render {
+
+class Renderer {
+ public:
+  // Uploads every mesh once into vertex buffers. MeshId i is meshes[i].
+  // max_width/max_height bound every later CameraView.
+  Renderer(const std::vector<Mesh>& meshes, uint32_t max_width, uint32_t max_height);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Renders `items` seen by `camera` into `out`. For every labelled item,
+  // unoccluded_pixels[item.instance] receives the pixel count of its
+  // silhouette rendered alone (entries of ids not drawn are left untouched);
+  // the span must have room for the largest instance id. No heap allocation.
+  void Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
+              std::span<uint32_t> unoccluded_pixels);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sim4cv::render

@@ -1,0 +1,217 @@
+#include "server/session/client_protocol.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "protocol/framing.h"
+#include "server/common/log.h"
+
+namespace sim4cv::session {
+namespace {
+
+using Outcome = ClientProtocol::Outcome;
+
+std::string CameraList(const sim::Scene& scene) {
+  std::string names;
+  for (const auto& camera : scene.cameras) names += (names.empty() ? "" : ", ") + ("'" + camera.name + "'");
+  return names;
+}
+
+// Empty if `value` is finite and within [low, high]; otherwise the complaint.
+std::string CheckRange(const char* field, double value, double low, double high) {
+  if (std::isfinite(value) && value >= low && value <= high) return {};
+  std::ostringstream message;
+  message << field << " is " << value << "; it must be a finite number in [" << low << ", " << high << "]";
+  return message.str();
+}
+
+std::string CheckFinite(const char* field, double value) {
+  if (std::isfinite(value)) return {};
+  std::ostringstream message;
+  message << field << " is " << value << "; it must be a finite number";
+  return message.str();
+}
+
+}  // namespace
+
+ClientProtocol::ClientProtocol(ClientId client, const ServerContext& context, std::shared_ptr<ClientLink> link,
+                               FrameMailbox& mailbox)
+    : client_(client), context_(context), link_(std::move(link)), mailbox_(mailbox) {}
+
+Outcome ClientProtocol::Refuse(proto::ErrorCode code, const std::string& message, bool fatal, proto::Envelope& reply) {
+  proto::Error* error = reply.mutable_error();
+  error->set_code(code);
+  error->set_message(message);
+  error->set_fatal(fatal);
+  return fatal ? Outcome::kReplyAndClose : Outcome::kReply;
+}
+
+Outcome ClientProtocol::Handle(const proto::Envelope& request, proto::Envelope& reply) {
+  reply.Clear();
+  using Kind = proto::Envelope::KindCase;
+  const Kind kind = request.kind_case();
+  if (kind == Kind::KIND_NOT_SET) {
+    return Refuse(proto::ERROR_CODE_UNEXPECTED_MESSAGE,
+                  "the envelope carries no message (empty oneof, or a field number this server does not know)", true,
+                  reply);
+  }
+  if (!handshaken_ && kind != Kind::kHello) {
+    return Refuse(proto::ERROR_CODE_NOT_HANDSHAKEN,
+                  "the first message must be Hello; got field " + std::to_string(static_cast<int>(kind)) +
+                      " before the handshake",
+                  true, reply);
+  }
+  switch (kind) {
+    case Kind::kHello: return HandleHello(request.hello(), reply);
+    case Kind::kSubscribe: return HandleSubscribe(request.subscribe(), reply);
+    case Kind::kStep: return HandleStep(reply);
+    case Kind::kControls: return HandleControls(request.controls(), reply);
+    case Kind::kTrackerOutput: return HandleTrackerOutput(request.tracker_output(), reply);
+    case Kind::kGetState: return HandleGetState(reply);
+    default:
+      return Refuse(proto::ERROR_CODE_UNEXPECTED_MESSAGE,
+                    "envelope field " + std::to_string(static_cast<int>(kind)) +
+                        " is a message only the server sends; clients send Hello, Subscribe, Step, TrackerOutput, "
+                        "Controls or GetState",
+                    true, reply);
+  }
+}
+
+Outcome ClientProtocol::HandleHello(const proto::Hello& hello, proto::Envelope& reply) {
+  if (handshaken_) {
+    return Refuse(proto::ERROR_CODE_INVALID_STATE, "Hello was already accepted on this connection; send it only once",
+                  false, reply);
+  }
+  if (hello.protocol_version() != wire::kProtocolVersion) {
+    return Refuse(proto::ERROR_CODE_VERSION_MISMATCH,
+                  "client speaks protocol version " + std::to_string(hello.protocol_version()) +
+                      " but this server speaks version " + std::to_string(wire::kProtocolVersion) +
+                      "; use a client built for version " + std::to_string(wire::kProtocolVersion),
+                  true, reply);
+  }
+  handshaken_ = true;
+  client_name_ = hello.client_name();
+  *reply.mutable_welcome() = context_.welcome;
+  reply.mutable_welcome()->set_client_id(client_);
+  LOG_INFO("client " << client_ << " ('" << client_name_ << "') completed the handshake");
+  return Outcome::kReply;
+}
+
+Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto::Envelope& reply) {
+  const int camera = context_.scene.FindCamera(subscribe.camera());
+  if (camera < 0) {
+    return Refuse(proto::ERROR_CODE_UNKNOWN_CAMERA,
+                  "no camera named '" + subscribe.camera() + "'; this scene has " + CameraList(context_.scene), false,
+                  reply);
+  }
+  if (subscribe.channels_size() == 0) {
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, "Subscribe.channels is empty; ask for at least one channel", false,
+                  reply);
+  }
+  uint32_t seen = 0;
+  for (int channel : subscribe.channels()) {
+    if (channel < proto::CHANNEL_RGB || channel > proto::CHANNEL_BOXES) {
+      return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                    "Subscribe.channels holds " + std::to_string(channel) + "; valid channels are 1 (RGB) to 4 (BOXES)",
+                    false, reply);
+    }
+    if (seen & (1u << channel)) {
+      return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                    "Subscribe.channels lists " + proto::Channel_Name(channel) + " twice", false, reply);
+    }
+    seen |= 1u << channel;
+  }
+  const proto::Delivery delivery = subscribe.delivery();
+  if (delivery != proto::DELIVERY_LOCKSTEP && delivery != proto::DELIVERY_NEWEST) {
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                  "Subscribe.delivery is " + std::to_string(delivery) + "; use DELIVERY_LOCKSTEP (1) or DELIVERY_NEWEST (2)",
+                  false, reply);
+  }
+  if (delivery == proto::DELIVERY_LOCKSTEP && context_.mode != proto::SIM_MODE_LOCKSTEP) {
+    return Refuse(proto::ERROR_CODE_INVALID_STATE,
+                  "lockstep delivery needs a daemon started with --mode lockstep; this one runs in realtime mode, "
+                  "so subscribe with DELIVERY_NEWEST",
+                  false, reply);
+  }
+  subscribed_ = true;
+  with_state_ = subscribe.with_state();
+  camera_index_ = static_cast<uint32_t>(camera);
+  outstanding_steps_ = 0;
+  subscription_.set_camera(subscribe.camera());
+  *subscription_.mutable_channels() = subscribe.channels();
+  subscription_.set_delivery(delivery);
+  mailbox_.Reset(delivery);
+  context_.commands.Post({client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, link_}});
+  *reply.mutable_subscribed() = subscription_;
+  return Outcome::kReply;
+}
+
+Outcome ClientProtocol::HandleStep(proto::Envelope& reply) {
+  if (!subscribed_ || subscription_.delivery() != proto::DELIVERY_LOCKSTEP) {
+    return Refuse(proto::ERROR_CODE_INVALID_STATE,
+                  "Step needs a lockstep subscription; send Subscribe with DELIVERY_LOCKSTEP first", false, reply);
+  }
+  if (outstanding_steps_ >= FrameMailbox::kMaxLockstepBacklog) {
+    return Refuse(proto::ERROR_CODE_INVALID_STATE,
+                  std::to_string(outstanding_steps_) + " Steps are already waiting for their frames (limit " +
+                      std::to_string(FrameMailbox::kMaxLockstepBacklog) + "); read frames before stepping further",
+                  false, reply);
+  }
+  ++outstanding_steps_;
+  context_.commands.Post({client_, StepCommand{}});
+  return Outcome::kNoReply;
+}
+
+Outcome ClientProtocol::HandleControls(const proto::Controls& controls, proto::Envelope& reply) {
+  if (controls.entity_id() != sim::kCarEntityId) {
+    return Refuse(proto::ERROR_CODE_UNKNOWN_ENTITY,
+                  "Controls.entity_id " + std::to_string(controls.entity_id()) + " is not a car; cars in this scene: " +
+                      std::to_string(sim::kCarEntityId) + " ('" + context_.scene.car.name + "')",
+                  false, reply);
+  }
+  for (const std::string& problem :
+       {CheckRange("Controls.steering", controls.steering(), -1, 1), CheckRange("Controls.throttle", controls.throttle(), 0, 1),
+        CheckRange("Controls.brake", controls.brake(), 0, 1)}) {
+    if (!problem.empty()) return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
+  }
+  context_.commands.Post(
+      {client_, ControlsCommand{controls.entity_id(), controls.steering(), controls.throttle(), controls.brake()}});
+  return Outcome::kNoReply;
+}
+
+Outcome ClientProtocol::HandleTrackerOutput(const proto::TrackerOutput& output, proto::Envelope& reply) {
+  const proto::ImageBox& box = output.box();
+  for (const std::string& problem :
+       {CheckFinite("TrackerOutput.box.x", box.x()), CheckFinite("TrackerOutput.box.y", box.y()),
+        CheckRange("TrackerOutput.box.width", box.width(), 1e-6, 1e9),
+        CheckRange("TrackerOutput.box.height", box.height(), 1e-6, 1e9),
+        CheckRange("TrackerOutput.confidence", output.confidence(), 0, 1)}) {
+    if (!problem.empty()) return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
+  }
+  context_.commands.Post({client_, TrackerOutputCommand{output.frame_id(), box.x(), box.y(), box.width(), box.height(),
+                                                        output.confidence()}});
+  return Outcome::kNoReply;
+}
+
+Outcome ClientProtocol::HandleGetState(proto::Envelope& reply) {
+  proto::State* state = reply.mutable_state();
+  const StateRef snapshot = context_.latest_state.Get();
+  if (!snapshot) return Outcome::kReply;  // before the first step: an empty State at frame 0
+  *state = snapshot->state;
+  for (std::size_t i = 0; i < snapshot->tracker_clients.size(); ++i) {
+    if (snapshot->tracker_clients[i] == client_) *state->mutable_last_tracker_output() = snapshot->tracker_outputs[i];
+  }
+  return Outcome::kReply;
+}
+
+void ClientProtocol::OnFrameSent() {
+  if (outstanding_steps_ > 0) --outstanding_steps_;
+}
+
+void ClientProtocol::Disconnect() {
+  if (disconnected_) return;
+  disconnected_ = true;
+  context_.commands.Post({client_, DisconnectCommand{}});
+}
+
+}  // namespace sim4cv::session

@@ -1,0 +1,72 @@
+// The per-connection protocol rules, the same for every transport: the
+// handshake, validation of every request against the immutable scene, and
+// turning accepted requests into Commands for the sim thread. Transports only
+// move bytes; they ask this class what to answer.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "server/session/client_link.h"
+#include "server/session/frame_mailbox.h"
+#include "server/session/server_context.h"
+
+namespace sim4cv::session {
+
+class ClientProtocol {
+ public:
+  enum class Outcome {
+    kNoReply,        // nothing to send
+    kReply,          // send `reply`
+    kReplyAndClose,  // send `reply` (a fatal Error), then close the connection
+  };
+
+  ClientProtocol(ClientId client, const ServerContext& context, std::shared_ptr<ClientLink> link,
+                 FrameMailbox& mailbox);
+
+  // Handles one decoded envelope from the client; fills `reply` when the
+  // outcome says so.
+  Outcome Handle(const proto::Envelope& request, proto::Envelope& reply);
+
+  // A transport-level refusal (bytes that never became an Envelope), phrased
+  // the same way as every other Error.
+  static Outcome Refuse(proto::ErrorCode code, const std::string& message, bool fatal, proto::Envelope& reply);
+
+  // The transport delivered one frame; a lockstep client may Step again.
+  void OnFrameSent();
+
+  // The connection is gone: tell the sim thread (once).
+  void Disconnect();
+
+  ClientId client() const { return client_; }
+  const std::string& client_name() const { return client_name_; }
+  bool subscribed() const { return subscribed_; }
+  bool with_state() const { return with_state_; }
+  uint32_t camera_index() const { return camera_index_; }
+  // Subscribed channels in subscription order.
+  const proto::Subscribed& subscription() const { return subscription_; }
+
+ private:
+  Outcome HandleHello(const proto::Hello& hello, proto::Envelope& reply);
+  Outcome HandleSubscribe(const proto::Subscribe& subscribe, proto::Envelope& reply);
+  Outcome HandleStep(proto::Envelope& reply);
+  Outcome HandleControls(const proto::Controls& controls, proto::Envelope& reply);
+  Outcome HandleTrackerOutput(const proto::TrackerOutput& output, proto::Envelope& reply);
+  Outcome HandleGetState(proto::Envelope& reply);
+
+  ClientId client_;
+  const ServerContext& context_;
+  std::shared_ptr<ClientLink> link_;
+  FrameMailbox& mailbox_;
+  std::string client_name_;
+  bool handshaken_ = false;
+  bool subscribed_ = false;
+  bool with_state_ = false;
+  uint32_t camera_index_ = 0;
+  bool disconnected_ = false;
+  proto::Subscribed subscription_;
+  uint64_t outstanding_steps_ = 0;
+};
+
+}  // namespace sim4cv::session

@@ -1,0 +1,51 @@
+// Validated requests that transports post to the sim thread. Transports have
+// already checked every field against the immutable scene, so the sim thread
+// applies them without further checks.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <variant>
+
+#include "server/session/client_link.h"
+#include "sim4cv.pb.h"
+
+namespace sim4cv::session {
+
+using ClientId = uint32_t;
+
+// Ids unique across all transports of the process, from 1.
+inline ClientId NewClientId() {
+  static std::atomic<ClientId> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
+
+struct SubscribeCommand {
+  uint32_t camera_index = 0;
+  proto::Delivery delivery = proto::DELIVERY_NEWEST;
+  std::shared_ptr<ClientLink> link;  // where frames go
+};
+
+struct StepCommand {};
+
+struct ControlsCommand {
+  uint32_t entity_id = 0;
+  float steering = 0, throttle = 0, brake = 0;
+};
+
+struct TrackerOutputCommand {
+  uint64_t frame_id = 0;
+  float x = 0, y = 0, width = 0, height = 0, confidence = 0;
+};
+
+// The client is gone: forget its subscription and step credits.
+struct DisconnectCommand {};
+
+struct Command {
+  ClientId client = 0;
+  std::variant<SubscribeCommand, StepCommand, ControlsCommand, TrackerOutputCommand, DisconnectCommand> body;
+};
+
+}  // namespace sim4cv::session

@@ -1,0 +1,40 @@
+// A rendered frame of one camera, built once by the sim thread and then
+// shared read-only by every transport that delivers it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "server/render/ground_truth.h"
+#include "server/session/ref_pool.h"
+#include "sim4cv.pb.h"
+
+namespace sim4cv::session {
+
+struct Frame {
+  uint64_t frame_id = 0;
+  double sim_time = 0.0;
+  uint32_t camera_index = 0;
+  uint32_t width = 0, height = 0;
+  std::vector<uint8_t> rgb;     // width*height*3
+  std::vector<float> depth;     // width*height, metres
+  std::vector<uint16_t> mask;   // width*height instance ids
+  std::vector<render::GroundTruthBox> boxes;
+  int64_t render_end_mono_ns = 0;
+  proto::State state;  // entity poses at this frame (reused message)
+};
+
+using FramePool = RefPool<Frame>;
+using FrameRef = PoolRef<Frame>;
+
+// The State snapshot every GetState is answered from, published each frame.
+struct StateSnapshot {
+  proto::State state;  // without last_tracker_output
+  std::vector<proto::TrackerOutput> tracker_outputs;  // parallel to tracker_clients
+  std::vector<uint32_t> tracker_clients;
+};
+
+using StatePool = RefPool<StateSnapshot>;
+using StateRef = PoolRef<StateSnapshot>;
+
+}  // namespace sim4cv::session

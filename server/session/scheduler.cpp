@@ -1,0 +1,62 @@
+#include "server/session/scheduler.h"
+
+#include <algorithm>
+
+namespace sim4cv::session {
+
+Scheduler::Subscription* Scheduler::Find(ClientId client) {
+  const auto it = std::find_if(subscriptions_.begin(), subscriptions_.end(),
+                               [&](const Subscription& s) { return s.client == client; });
+  return it == subscriptions_.end() ? nullptr : &*it;
+}
+
+void Scheduler::Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery,
+                          std::shared_ptr<ClientLink> link) {
+  Subscription* existing = Find(client);
+  if (existing) {
+    // A replaced subscription keeps no credits: they were for the old one.
+    *existing = {client, camera_index, delivery, 0, std::move(link)};
+    return;
+  }
+  const auto position = std::lower_bound(subscriptions_.begin(), subscriptions_.end(), client,
+                                         [](const Subscription& s, ClientId id) { return s.client < id; });
+  subscriptions_.insert(position, {client, camera_index, delivery, 0, std::move(link)});
+}
+
+void Scheduler::AddStep(ClientId client) {
+  Subscription* s = Find(client);
+  if (s && s->delivery == proto::DELIVERY_LOCKSTEP) ++s->step_credits;
+}
+
+void Scheduler::Remove(ClientId client) {
+  std::erase_if(subscriptions_, [&](const Subscription& s) { return s.client == client; });
+}
+
+bool Scheduler::LockstepReady() const {
+  bool any_lockstep = false;
+  for (const auto& s : subscriptions_) {
+    if (s.delivery != proto::DELIVERY_LOCKSTEP) continue;
+    if (s.step_credits == 0) return false;
+    any_lockstep = true;
+  }
+  return any_lockstep;
+}
+
+void Scheduler::ConsumeSteps() {
+  for (auto& s : subscriptions_) {
+    if (s.delivery == proto::DELIVERY_LOCKSTEP && s.step_credits > 0) --s.step_credits;
+  }
+}
+
+bool Scheduler::CameraWanted(uint32_t camera_index) const {
+  return std::any_of(subscriptions_.begin(), subscriptions_.end(),
+                     [&](const Subscription& s) { return s.camera_index == camera_index; });
+}
+
+void Scheduler::Deliver(const FrameRef& frame) const {
+  for (const auto& s : subscriptions_) {
+    if (s.camera_index == frame->camera_index) s.link->OfferFrame(frame);
+  }
+}
+
+}  // namespace sim4cv::session

@@ -1,0 +1,119 @@
+#include "server/sim/scene.h"
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include "server/common/check.h"
+
+namespace sim4cv::sim {
+
+int Scene::FindCamera(const std::string& camera_name) const {
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    if (cameras[i].name == camera_name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+namespace {
+
+// Reads exactly `count` numbers from the rest of a line.
+std::vector<float> ReadNumbers(std::istringstream& words, std::size_t count, int line_number, const std::string& line) {
+  std::vector<float> values;
+  float v = 0;
+  while (words >> v) values.push_back(v);
+  SIM4CV_THROW_UNLESS(values.size() == count && words.eof(),
+                      "scene line " << line_number << " '" << line << "': expected " << count << " numbers");
+  for (float x : values) {
+    SIM4CV_THROW_UNLESS(std::isfinite(x), "scene line " << line_number << " '" << line << "': number not finite");
+  }
+  return values;
+}
+
+void RequirePositive(float value, const char* what, int line_number, const std::string& line) {
+  SIM4CV_THROW_UNLESS(value > 0, "scene line " << line_number << " '" << line << "': " << what << " must be > 0");
+}
+
+}  // namespace
+
+Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera_height) {
+  Scene scene;
+  std::istringstream lines(text);
+  std::string line;
+  int line_number = 0;
+  float camera_pitch_deg = 60.0f;
+  using Handler = std::function<void(std::istringstream&)>;
+  // Each keyword consumes the rest of its line; see docs/scenes.md.
+  const std::map<std::string, Handler> handlers = {
+      {"scene", [&](std::istringstream& w) { SIM4CV_THROW_UNLESS(w >> scene.name, "scene line " << line_number << ": scene needs a name"); }},
+      {"ground", [&](std::istringstream& w) {
+         scene.ground_half_size = ReadNumbers(w, 1, line_number, line)[0];
+         RequirePositive(scene.ground_half_size, "ground half size", line_number, line);
+       }},
+      {"lane_width", [&](std::istringstream& w) {
+         scene.lane_width = ReadNumbers(w, 1, line_number, line)[0];
+         RequirePositive(scene.lane_width, "lane width", line_number, line);
+       }},
+      {"road", [&](std::istringstream& w) {
+         const auto v = ReadNumbers(w, 2, line_number, line);
+         scene.road_loop.emplace_back(v[0], v[1]);
+       }},
+      {"building", [&](std::istringstream& w) {
+         const auto v = ReadNumbers(w, 6, line_number, line);
+         BuildingSpec b;
+         b.id = kFirstBuildingId + static_cast<uint32_t>(scene.buildings.size());
+         b.centre = {v[0], v[1]};
+         b.half_size = {v[2], v[3]};
+         b.height = v[4];
+         b.yaw_deg = v[5];
+         RequirePositive(std::min({v[2], v[3], v[4]}), "building size", line_number, line);
+         scene.buildings.push_back(b);
+       }},
+      {"car_speed", [&](std::istringstream& w) {
+         scene.car.cruise_speed = ReadNumbers(w, 1, line_number, line)[0];
+         RequirePositive(scene.car.cruise_speed, "car speed", line_number, line);
+       }},
+      {"uav_altitude", [&](std::istringstream& w) {
+         scene.uav.altitude = ReadNumbers(w, 1, line_number, line)[0];
+         RequirePositive(scene.uav.altitude, "uav altitude", line_number, line);
+       }},
+      {"camera_pitch", [&](std::istringstream& w) {
+         const float pitch = ReadNumbers(w, 1, line_number, line)[0];
+         SIM4CV_THROW_UNLESS(pitch > 0 && pitch <= 90, "scene line " << line_number << " '" << line << "': camera pitch must be in (0, 90]");
+         camera_pitch_deg = pitch;
+       }},
+  };
+  while (std::getline(lines, line)) {
+    ++line_number;
+    const auto hash = line.find('#');
+    std::istringstream words(line.substr(0, hash));
+    std::string keyword;
+    if (!(words >> keyword)) continue;
+    const auto handler = handlers.find(keyword);
+    SIM4CV_THROW_UNLESS(handler != handlers.end(), "scene line " << line_number << ": unknown keyword '" << keyword << "'");
+    handler->second(words);
+  }
+  SIM4CV_THROW_UNLESS(camera_width > 0 && camera_height > 0,
+                      "camera size " << camera_width << "x" << camera_height << " must be positive");
+  scene.cameras.push_back({"uav", scene.uav.name, camera_width, camera_height, 60.0f, camera_pitch_deg});
+  SIM4CV_THROW_UNLESS(scene.road_loop.size() >= 3,
+                      "scene '" << scene.name << "' has " << scene.road_loop.size() << " road points; a loop needs at least 3");
+  SIM4CV_THROW_UNLESS(scene.buildings.size() < 65535 - kFirstBuildingId, "scene has too many buildings");
+  return scene;
+}
+
+Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height) {
+  std::ifstream in(path);
+  SIM4CV_THROW_UNLESS(in, "cannot open scene file '" << path << "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  return ParseScene(text.str(), camera_width, camera_height);
+}
+
+Scene DefaultScene(uint32_t camera_width, uint32_t camera_height) {
+  return ParseScene(DefaultSceneText(), camera_width, camera_height);
+}
+
+}  // namespace sim4cv::sim

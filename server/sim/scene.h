@@ -1,0 +1,79 @@
+// The immutable half of the simulation (after MuJoCo's mjModel): everything a
+// loaded map defines and no step changes. State (state.h) holds the rest.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sim4cv::sim {
+
+// Ids shared by the protocol (EntityInfo.id), the instance mask and the boxes.
+inline constexpr uint32_t kCarEntityId = 1;
+inline constexpr uint32_t kUavEntityId = 2;
+inline constexpr uint32_t kFirstBuildingId = 100;
+
+struct BuildingSpec {
+  uint32_t id = 0;                  // instance id in the mask
+  Eigen::Vector2f centre{0, 0};     // metres
+  Eigen::Vector2f half_size{5, 5};  // metres, along the building's own x/y
+  float height = 10.0f;             // metres
+  float yaw_deg = 0.0f;
+};
+
+struct CarSpec {
+  std::string name = "car";
+  float length = 4.5f, width = 1.8f, height = 1.5f;  // metres
+  float mass = 1200.0f;                               // kg
+  float cruise_speed = 6.0f;                          // m/s, waypoint follower's set speed
+  float lookahead = 8.0f;                             // m, pure pursuit
+  float max_accel = 3.0f;                             // m/s^2
+  float max_brake_decel = 8.0f;                       // m/s^2
+  float max_steer_deg = 35.0f;
+  float wheelbase = 2.7f;                             // m
+};
+
+struct UavSpec {
+  std::string name = "uav";
+  float mass = 1.5f;       // kg
+  float span = 0.6f;       // m
+  float altitude = 15.0f;  // m above the car it follows
+};
+
+struct CameraSpec {
+  std::string name;
+  std::string mounted_on;  // entity name
+  uint32_t width = 320, height = 180;
+  float fov_y_deg = 60.0f;
+  float pitch_down_deg = 60.0f;  // gimbal pitch, held regardless of the body's attitude
+};
+
+struct Scene {
+  std::string name = "default";
+  float ground_half_size = 150.0f;  // metres
+  float lane_width = 4.0f;          // metres; the road has two lanes
+  std::vector<Eigen::Vector2f> road_loop;  // closed centre line, in driving order
+  std::vector<BuildingSpec> buildings;
+  CarSpec car;
+  UavSpec uav;
+  std::vector<CameraSpec> cameras;
+
+  // Index of the camera called `name`, or -1.
+  int FindCamera(const std::string& name) const;
+};
+
+// Parses the scene text format (docs/scenes.md). Throws std::invalid_argument
+// naming the line number and the offending text.
+Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera_height);
+
+// Reads and parses a scene file.
+Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height);
+
+// The scene compiled into the daemon, used when no --scene is given.
+Scene DefaultScene(uint32_t camera_width, uint32_t camera_height);
+
+// The text of the embedded default scene (also a worked example of the format).
+const std::string& DefaultSceneText();
+
+}  // namespace sim4cv::sim

@@ -1,0 +1,143 @@
+#include "server/transport/frame_encoding.h"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/wire_format_lite.h>
+
+#include "protocol/framing.h"
+#include "server/common/check.h"
+
+namespace sim4cv::transport {
+namespace {
+
+using google::protobuf::io::CodedOutputStream;
+using google::protobuf::internal::WireFormatLite;
+
+constexpr uint32_t kEnvelopeFrameTag = WireFormatLite::MakeTag(proto::Envelope::kFrameFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
+constexpr uint32_t kFrameImagesTag = WireFormatLite::MakeTag(proto::Frame::kImagesFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
+constexpr uint32_t kImageDataTag = WireFormatLite::MakeTag(proto::Image::kDataFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
+
+void AppendVarint(std::string& out, uint32_t value) {
+  uint8_t buffer[5];
+  const uint8_t* end = CodedOutputStream::WriteVarint32ToArray(value, buffer);
+  out.append(reinterpret_cast<const char*>(buffer), static_cast<std::size_t>(end - buffer));
+}
+
+std::size_t VarintSize(std::size_t value) { return CodedOutputStream::VarintSize32(static_cast<uint32_t>(value)); }
+
+struct PixelChannel {
+  proto::Channel channel;
+  proto::PixelFormat format;
+  const uint8_t* data;
+  uint32_t bytes_per_pixel;
+};
+
+PixelChannel PixelsOf(const session::Frame& frame, int channel) {
+  switch (channel) {
+    case proto::CHANNEL_RGB: return {proto::CHANNEL_RGB, proto::PIXEL_FORMAT_RGB8, frame.rgb.data(), 3};
+    case proto::CHANNEL_DEPTH:
+      return {proto::CHANNEL_DEPTH, proto::PIXEL_FORMAT_DEPTH_F32, reinterpret_cast<const uint8_t*>(frame.depth.data()), 4};
+    case proto::CHANNEL_MASK:
+      return {proto::CHANNEL_MASK, proto::PIXEL_FORMAT_INSTANCE_U16, reinterpret_cast<const uint8_t*>(frame.mask.data()), 2};
+    default: return {proto::CHANNEL_UNSPECIFIED, proto::PIXEL_FORMAT_UNSPECIFIED, nullptr, 0};
+  }
+}
+
+void FillImageHeader(const PixelChannel& pixels, uint32_t width, proto::Image& image) {
+  image.Clear();
+  image.set_channel(pixels.channel);
+  image.set_format(pixels.format);
+  image.set_stride(width * pixels.bytes_per_pixel);
+}
+
+void FillMeta(const session::Frame& frame, const std::string& camera_name, bool with_boxes, bool with_state,
+              uint64_t dropped, proto::Frame& meta) {
+  meta.Clear();  // keeps the repeated boxes' allocations for reuse
+  meta.set_frame_id(frame.frame_id);
+  meta.set_sim_time(frame.sim_time);
+  meta.set_camera(camera_name);
+  meta.set_width(frame.width);
+  meta.set_height(frame.height);
+  meta.set_dropped_frames(dropped);
+  meta.set_render_end_mono_ns(frame.render_end_mono_ns);
+  if (with_state) *meta.mutable_state() = frame.state;
+  if (!with_boxes) return;
+  for (const auto& box : frame.boxes) {
+    proto::Box* out = meta.add_boxes();
+    out->set_object_id(box.instance);
+    out->set_object_class(static_cast<proto::ObjectClass>(box.object_class));
+    out->set_x(box.x);
+    out->set_y(box.y);
+    out->set_width(box.width);
+    out->set_height(box.height);
+    out->set_visibility(box.visibility);
+    out->set_visible_pixels(box.visible_pixels);
+  }
+}
+
+}  // namespace
+
+void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera_name,
+                          const proto::Subscribed& subscription, bool with_state, uint64_t dropped, bool length_prefix) {
+  bool with_boxes = false;
+  for (int channel : subscription.channels()) with_boxes = with_boxes || channel == proto::CHANNEL_BOXES;
+  FillMeta(frame, camera_name, with_boxes, with_state, dropped, meta_);
+
+  // Pass 1: sizes, since each length-delimited field is preceded by its size.
+  const std::size_t pixel_count = static_cast<std::size_t>(frame.width) * frame.height;
+  std::size_t frame_body = meta_.ByteSizeLong();
+  std::array<std::size_t, 4> image_header_size{};
+  std::array<std::size_t, 4> image_data_size{};
+  std::array<PixelChannel, 4> pixel_channels{};
+  std::size_t image_count = 0;
+  for (int channel : subscription.channels()) {
+    const PixelChannel pixels = PixelsOf(frame, channel);
+    if (!pixels.data) continue;
+    SIM4CV_DEMAND(image_count < pixel_channels.size());
+    FillImageHeader(pixels, frame.width, image_);
+    const std::size_t data_size = pixel_count * pixels.bytes_per_pixel;
+    const std::size_t image_body = image_.ByteSizeLong() + VarintSize(kImageDataTag) + VarintSize(data_size) + data_size;
+    frame_body += VarintSize(kFrameImagesTag) + VarintSize(image_body) + image_body;
+    image_header_size[image_count] = image_body - data_size;
+    image_data_size[image_count] = data_size;
+    pixel_channels[image_count] = pixels;
+    ++image_count;
+  }
+  const std::size_t envelope_size = VarintSize(kEnvelopeFrameTag) + VarintSize(frame_body) + frame_body;
+
+  // Pass 2: header bytes in wire order, remembering where pixels go between them.
+  headers_.clear();
+  if (length_prefix) {
+    uint8_t prefix[wire::kLengthPrefixBytes];
+    wire::EncodeLengthPrefix(static_cast<uint32_t>(envelope_size), prefix);
+    headers_.append(reinterpret_cast<const char*>(prefix), sizeof prefix);
+  }
+  AppendVarint(headers_, kEnvelopeFrameTag);
+  AppendVarint(headers_, static_cast<uint32_t>(frame_body));
+  meta_.AppendToString(&headers_);
+  std::array<std::size_t, 4> header_end{};
+  for (std::size_t i = 0; i < image_count; ++i) {
+    FillImageHeader(pixel_channels[i], frame.width, image_);
+    AppendVarint(headers_, kFrameImagesTag);
+    AppendVarint(headers_, static_cast<uint32_t>(image_header_size[i] + image_data_size[i]));
+    image_.AppendToString(&headers_);
+    AppendVarint(headers_, kImageDataTag);
+    AppendVarint(headers_, static_cast<uint32_t>(image_data_size[i]));
+    header_end[i] = headers_.size();
+  }
+
+  // headers_ no longer grows, so pointers into it stay valid.
+  segment_count_ = 0;
+  std::size_t start = 0;
+  const auto* header_bytes = reinterpret_cast<const uint8_t*>(headers_.data());
+  for (std::size_t i = 0; i < image_count; ++i) {
+    segments_[segment_count_++] = {header_bytes + start, header_end[i] - start};
+    segments_[segment_count_++] = {pixel_channels[i].data, image_data_size[i]};
+    start = header_end[i];
+  }
+  if (start < headers_.size() || segment_count_ == 0) segments_[segment_count_++] = {header_bytes + start, headers_.size() - start};
+  total_size_ = headers_.size();
+  for (std::size_t i = 0; i < image_count; ++i) total_size_ += image_data_size[i];
+  SIM4CV_ASSERT(total_size_ == envelope_size + (length_prefix ? wire::kLengthPrefixBytes : 0));
+}
+
+}  // namespace sim4cv::transport
