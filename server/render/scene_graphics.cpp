@@ -65,8 +65,10 @@ CameraView SceneGraphics::CameraAt(std::size_t camera_index, const sim::State& s
   const double pitch = spec.pitch_down_deg * std::numbers::pi / 180.0;
   const Eigen::Vector3d eye = mount.position - Eigen::Vector3d(0, 0, 0.3);
   const Eigen::Vector3d look(std::cos(yaw) * std::cos(pitch), std::sin(yaw) * std::cos(pitch), -std::sin(pitch));
+  // The camera's own up vector: well defined even when looking straight down.
+  const Eigen::Vector3d up(std::cos(yaw) * std::sin(pitch), std::sin(yaw) * std::sin(pitch), std::cos(pitch));
   CameraView view;
-  view.world_from_camera = LookAt(eye.cast<float>(), (eye + look).cast<float>(), Eigen::Vector3f::UnitZ());
+  view.world_from_camera = LookAt(eye.cast<float>(), (eye + look).cast<float>(), up.cast<float>());
   view.fov_y_deg = spec.fov_y_deg;
   view.near_m = 0.1f;
   view.far_m = 1000.0f;

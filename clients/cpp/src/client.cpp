@@ -1,0 +1,279 @@
+// Session logic of sim4cv::Client: handshake, request/response matching and
+// the frame receive path. Socket details live in socket_io.cpp.
+#include "sim4cv/client.h"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <climits>
+
+#include "socket_io.h"
+
+namespace sim4cv {
+namespace {
+
+using Envelope = proto::Envelope;
+
+// First byte of an Envelope that carries a Frame (field number, wire type 2).
+constexpr uint8_t kFrameFieldTag = (Envelope::kFrameFieldNumber << 3) | 2;
+
+detail::Deadline DeadlineAfter(Client::Duration timeout) { return std::chrono::steady_clock::now() + timeout; }
+
+std::string TimeoutMessage(const char* awaited, Client::Duration timeout, const std::string& peer) {
+  return "timed out after " + std::to_string(timeout.count()) + " ms waiting for " + awaited + " from sim4cvd at " +
+         peer;
+}
+
+}  // namespace
+
+ServerError::ServerError(proto::ErrorCode code, const std::string& message, bool fatal)
+    : std::runtime_error(message), code_(code), fatal_(fatal) {}
+
+std::optional<ImageView> FindImage(const proto::Frame& frame, proto::Channel channel) {
+  for (const proto::Image& image : frame.images()) {
+    if (image.channel() != channel) continue;
+    // A view that promises more bytes than the frame holds would let callers
+    // read past the buffer, so a short image is a broken peer, not a view.
+    if (image.data().size() < static_cast<std::size_t>(image.stride()) * frame.height()) {
+      throw ConnectionError("frame " + std::to_string(frame.frame_id()) + ": " + proto::Channel_Name(channel) +
+                            " carries " + std::to_string(image.data().size()) + " bytes, fewer than stride " +
+                            std::to_string(image.stride()) + " x height " + std::to_string(frame.height()));
+    }
+    return ImageView{reinterpret_cast<const uint8_t*>(image.data().data()), frame.width(), frame.height(),
+                     image.stride(), image.format()};
+  }
+  return std::nullopt;
+}
+
+Client::~Client() { Close(); }
+
+void Client::ConnectRaw(const std::string& host, uint16_t port, Duration timeout) {
+  Close();
+  welcome_.Clear();
+  fd_ = detail::ConnectTcp(host, port, DeadlineAfter(timeout));
+  peer_ = host + ":" + std::to_string(port);
+}
+
+void Client::Connect(const std::string& host, uint16_t port, const std::string& client_name, Duration timeout,
+                     uint32_t protocol_version) {
+  // One deadline for connecting and the handshake: the caller's timeout
+  // bounds the whole call.
+  const detail::Deadline deadline = DeadlineAfter(timeout);
+  ConnectRaw(host, port, timeout);
+  try {
+    Envelope hello;
+    hello.mutable_hello()->set_protocol_version(protocol_version == 0 ? wire::kProtocolVersion : protocol_version);
+    hello.mutable_hello()->set_client_name(client_name);
+    SendEnvelope(hello);
+    Envelope reply;
+    if (!ReceiveKind(Envelope::kWelcome, reply, deadline)) {
+      throw ConnectionError(TimeoutMessage("Welcome", timeout, peer_));
+    }
+    welcome_ = std::move(*reply.mutable_welcome());
+  } catch (...) {
+    Close();  // a half-done handshake leaves nothing usable
+    throw;
+  }
+}
+
+void Client::Subscribe(const std::string& camera, const std::vector<proto::Channel>& channels, proto::Delivery delivery,
+                       bool with_state, Duration timeout) {
+  const detail::Deadline deadline = DeadlineAfter(timeout);
+  Envelope request;
+  proto::Subscribe& subscribe = *request.mutable_subscribe();
+  subscribe.set_camera(camera);
+  for (const proto::Channel channel : channels) subscribe.add_channels(channel);
+  subscribe.set_delivery(delivery);
+  subscribe.set_with_state(with_state);
+  SendEnvelope(request);
+  Envelope reply;
+  if (!ReceiveKind(Envelope::kSubscribed, reply, deadline)) {
+    throw ConnectionError(TimeoutMessage("Subscribed", timeout, peer_));
+  }
+  // The daemon sends Subscribed before any frame of the new subscription, so
+  // every frame queued by now belongs to the one it replaced.
+  std::erase_if(pending_, [](const Envelope& queued) { return queued.has_frame(); });
+}
+
+void Client::Step() {
+  Envelope step;
+  step.mutable_step();
+  SendEnvelope(step);
+}
+
+bool Client::ReceiveFrame(proto::Frame& frame, Duration timeout) {
+  if (!ReceiveKind(Envelope::kFrame, scratch_, DeadlineAfter(timeout))) return false;
+  // Swapping hands the pixels over without a copy and leaves the caller's
+  // previous frame in scratch_, whose buffers the next parse fills in place.
+  frame.Swap(scratch_.mutable_frame());
+  return true;
+}
+
+const proto::Frame& Client::StepAndReceive(Duration timeout) {
+  Step();
+  if (!ReceiveFrame(frame_, timeout)) throw ConnectionError(TimeoutMessage("a Frame", timeout, peer_));
+  return frame_;
+}
+
+void Client::SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence) {
+  Envelope envelope;
+  proto::TrackerOutput& output = *envelope.mutable_tracker_output();
+  output.set_frame_id(frame_id);
+  output.mutable_box()->set_x(x);
+  output.mutable_box()->set_y(y);
+  output.mutable_box()->set_width(width);
+  output.mutable_box()->set_height(height);
+  output.set_confidence(confidence);
+  SendEnvelope(envelope);
+}
+
+void Client::SendControls(uint32_t entity_id, float steering, float throttle, float brake) {
+  Envelope envelope;
+  proto::Controls& controls = *envelope.mutable_controls();
+  controls.set_entity_id(entity_id);
+  controls.set_steering(steering);
+  controls.set_throttle(throttle);
+  controls.set_brake(brake);
+  SendEnvelope(envelope);
+}
+
+proto::State Client::GetState(Duration timeout) {
+  const detail::Deadline deadline = DeadlineAfter(timeout);
+  Envelope reply;
+  // A queued State answers a request already made; asking again would leave
+  // every later GetState one answer behind.
+  const bool queued = std::any_of(pending_.begin(), pending_.end(), [](const Envelope& e) { return e.has_state(); });
+  if (!queued) {
+    Envelope request;
+    request.mutable_get_state();
+    SendEnvelope(request);
+  }
+  if (!ReceiveKind(Envelope::kState, reply, deadline)) throw ConnectionError(TimeoutMessage("State", timeout, peer_));
+  return std::move(*reply.mutable_state());
+}
+
+void Client::SendEnvelope(const Envelope& envelope) {
+  RequireConnected();
+  const std::size_t body_size = envelope.ByteSizeLong();
+  if (body_size > UINT32_MAX) throw std::length_error("envelope of " + std::to_string(body_size) + " bytes");
+  // Prefix and body in one buffer so that each envelope is one send().
+  send_buffer_.resize(wire::kLengthPrefixBytes + body_size);
+  auto* bytes = reinterpret_cast<uint8_t*>(send_buffer_.data());
+  wire::EncodeLengthPrefix(static_cast<uint32_t>(body_size), bytes);
+  envelope.SerializeWithCachedSizesToArray(bytes + wire::kLengthPrefixBytes);
+  SendRaw(bytes, send_buffer_.size());
+}
+
+void Client::SendRaw(const void* data, std::size_t size) {
+  RequireConnected();
+  try {
+    detail::WriteAll(fd_, data, size, peer_);
+  } catch (const ConnectionError&) {
+    Close();
+    throw;
+  }
+}
+
+bool Client::ReceiveEnvelope(Envelope& envelope, Duration timeout) {
+  if (!pending_.empty()) {
+    envelope.Swap(&pending_.front());
+    pending_.pop_front();
+    return true;
+  }
+  if (!ReadEnvelope(DeadlineAfter(timeout))) return false;
+  envelope.Swap(&scratch_);
+  return true;
+}
+
+void Client::Close() {
+  if (fd_ >= 0) close(fd_);
+  fd_ = -1;
+  pending_.clear();
+  prefix_filled_ = 0;
+  body_filled_ = 0;
+}
+
+bool Client::ReceiveKind(Envelope::KindCase kind, Envelope& out, Deadline deadline) {
+  const auto queued =
+      std::find_if(pending_.begin(), pending_.end(), [kind](const Envelope& e) { return e.kind_case() == kind; });
+  if (queued != pending_.end()) {
+    out.Swap(&*queued);
+    pending_.erase(queued);
+    return true;
+  }
+  while (ReadEnvelope(deadline)) {
+    if (scratch_.kind_case() == kind) {
+      if (&out != &scratch_) out.Swap(&scratch_);
+      return true;
+    }
+    if (scratch_.has_error()) ThrowServerError(scratch_.error());
+    pending_.push_back(std::move(scratch_));
+  }
+  return false;
+}
+
+bool Client::ReadEnvelope(Deadline deadline) {
+  RequireConnected();
+  try {
+    if (prefix_filled_ < wire::kLengthPrefixBytes) {
+      if (detail::ReadUntil(fd_, prefix_, sizeof prefix_, prefix_filled_, deadline, peer_) ==
+          detail::ReadStatus::kTimeout) {
+        return false;
+      }
+      body_size_ = wire::DecodeLengthPrefix(prefix_);
+      // CodedInputStream takes an int size, so INT_MAX caps any limit.
+      if (body_size_ > std::min<std::size_t>(max_message_bytes_, INT_MAX)) {
+        FailConnection("sim4cvd announced a message of " + std::to_string(body_size_) +
+                       " bytes, more than the limit of " + std::to_string(max_message_bytes_));
+      }
+      // Grow only: resizing down and up again would zero-fill each time.
+      if (buffer_.size() < body_size_) buffer_.resize(body_size_);
+      body_filled_ = 0;
+    }
+    if (detail::ReadUntil(fd_, reinterpret_cast<uint8_t*>(buffer_.data()), body_size_, body_filled_, deadline, peer_) ==
+        detail::ReadStatus::kTimeout) {
+      return false;
+    }
+  } catch (const ConnectionError&) {
+    Close();
+    throw;
+  }
+  prefix_filled_ = 0;
+  ParseScratch(body_size_);
+  return true;
+}
+
+void Client::ParseScratch(std::size_t size) {
+  // Envelope::Clear() would delete the Frame in its oneof. Clearing only the
+  // Frame keeps its images' byte buffers and repeated elements allocated, so
+  // a frame like the last one parses without touching the heap. It is only
+  // safe when the new envelope is a frame too, which its first byte tells.
+  const bool reuse_frame = scratch_.has_frame() && size > 0 && static_cast<uint8_t>(buffer_[0]) == kFrameFieldTag;
+  if (reuse_frame) {
+    scratch_.mutable_frame()->Clear();
+  } else {
+    scratch_.Clear();
+  }
+  google::protobuf::io::CodedInputStream input(reinterpret_cast<const uint8_t*>(buffer_.data()),
+                                               static_cast<int>(size));
+  if (!scratch_.MergePartialFromCodedStream(&input) || !input.ConsumedEntireMessage()) {
+    FailConnection("sim4cvd sent " + std::to_string(size) + " bytes that are not a valid Envelope");
+  }
+}
+
+void Client::ThrowServerError(const proto::Error& error) {
+  if (error.fatal()) Close();
+  throw ServerError(error.code(), error.message(), error.fatal());
+}
+
+void Client::FailConnection(const std::string& what) {
+  Close();
+  throw ConnectionError(what + " (" + peer_ + ")");
+}
+
+void Client::RequireConnected() const {
+  if (fd_ < 0) throw ConnectionError("not connected to sim4cvd" + (peer_.empty() ? "" : " at " + peer_));
+}
+
+}  // namespace sim4cv

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package sim4cv needs to build, run and test.
+# Idempotent: installs only what is missing, and touches apt only then.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config
+  libbullet-dev libeigen3-dev libosmesa6-dev libboost-dev
+  protobuf-compiler libprotobuf-dev
+  libopencv-dev libopencv-contrib-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3 python3-protobuf python3-numpy python3-pytest
+)
+
+missing=()
+for package in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$package")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "setup: installing ${missing[*]}"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

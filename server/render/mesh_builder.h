@@ -1,0 +1,39 @@
+// Procedural meshes for the built-in scenes: z-up world, metres, front faces
+// counter-clockwise seen from outside, outward unit normals, flat shading
+// (vertices are not shared between faces so the normals stay crisp).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "server/render/render_types.h"
+
+namespace sim4cv::render {
+
+// An axis-aligned box centred at the origin: 24 vertices, 12 triangles.
+Mesh MakeBox(const Eigen::Vector3f& half_extents, const Eigen::Vector3f& color);
+
+// A square at z = 0 spanning [-half_size, half_size]^2, split into an 8x8
+// checkerboard of slightly different tints so motion over it is visible.
+Mesh MakeGroundPlane(float half_size, const Eigen::Vector3f& color);
+
+// A flat two-lane road (total width 2 * lane_width) just above z = 0 along the
+// closed polyline (the last point joins the first; at least 3 points), with
+// solid edge lines and a dashed centre line raised slightly above the asphalt.
+Mesh MakeRoadLoop(const std::vector<Eigen::Vector2f>& closed_centerline, float lane_width,
+                  const Eigen::Vector3f& asphalt, const Eigen::Vector3f& marking);
+
+// A car: wheels, body and a cabin, x forward. Its bounds are exactly
+// [-length/2, length/2] x [-width/2, width/2] x [-height/2, height/2], so a
+// physics box with those half extents matches it. 72 triangles.
+Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f& color);
+
+// A quadrotor: a hub, two crossed arms of length `span` along the diagonals
+// and four flat rotor blocks at the arm tips, centred at the origin. 84 triangles.
+Mesh MakeUavMesh(float span, const Eigen::Vector3f& color);
+
+// Appends `part` moved by `transform` (normals follow its inverse transpose;
+// a mirroring transform keeps the faces counter-clockwise).
+void AppendMesh(Mesh& into, const Mesh& part, const Eigen::Matrix4f& transform);
+
+}  // namespace sim4cv::render

@@ -1,0 +1,368 @@
+// One geometry pass writes colour, linear depth and instance id through
+// multiple render targets; a second, stencil-only pass counts each labelled
+// instance's unoccluded silhouette with occlusion queries.
+#include "server/render/renderer.h"
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <limits>
+#include <stdexcept>
+
+#include "server/common/check.h"
+#include "server/render/camera_math.h"
+#include "server/render/gl_program.h"
+
+namespace sim4cv::render {
+namespace {
+
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec3 a_color;
+uniform mat4 u_model;
+uniform mat4 u_view;
+uniform mat4 u_projection;
+uniform mat3 u_normal_matrix;
+out vec3 v_normal;
+out vec3 v_color;
+out float v_depth;
+void main() {
+  vec4 camera_position = u_view * (u_model * vec4(a_position, 1.0));
+  v_depth = -camera_position.z;  // camera-space z is affine over a triangle, so interpolation is exact
+  v_normal = u_normal_matrix * a_normal;
+  v_color = a_color;
+  gl_Position = u_projection * camera_position;
+}
+)";
+
+constexpr const char* kFragmentShader = R"(#version 330 core
+in vec3 v_normal;
+in vec3 v_color;
+in float v_depth;
+uniform uint u_instance;
+uniform vec3 u_to_light;
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out float out_depth;
+layout(location = 2) out uint out_instance;
+const float kAmbient = 0.35;
+void main() {
+  float lambert = max(dot(normalize(v_normal), u_to_light), 0.0);
+  vec3 linear_rgb = v_color * (kAmbient + (1.0 - kAmbient) * lambert);
+  out_color = vec4(pow(linear_rgb, vec3(1.0 / 2.2)), 1.0);  // 8-bit output is gamma encoded
+  out_depth = v_depth;
+  out_instance = u_instance;
+}
+)";
+
+enum Attachment : GLuint { kColorAttachment = 0, kDepthAttachment = 1, kInstanceAttachment = 2, kAttachmentCount = 3 };
+
+// Sky colour, already gamma encoded since clears bypass the shader.
+constexpr GLfloat kBackground[4] = {0.62f, 0.76f, 0.90f, 1.0f};
+// Stencil references 1..255 tag successive instances, so the stencil buffer
+// is cleared only once per 255 instances instead of once per instance.
+constexpr GLint kMaxStencilReference = 255;
+
+struct MeshRange {
+  GLsizei index_count = 0;
+  size_t first_index = 0;
+  Eigen::Vector3f sphere_center = Eigen::Vector3f::Zero();  // model frame
+  float sphere_radius = 0.0f;
+};
+
+MeshRange BoundingSphere(const Mesh& mesh) {
+  MeshRange range;
+  if (mesh.vertices.empty()) return range;
+  Eigen::Vector3f low = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  Eigen::Vector3f high = -low;
+  for (const Vertex& vertex : mesh.vertices) {
+    const Eigen::Vector3f p(vertex.position[0], vertex.position[1], vertex.position[2]);
+    low = low.cwiseMin(p);
+    high = high.cwiseMax(p);
+  }
+  range.sphere_center = 0.5f * (low + high);
+  for (const Vertex& vertex : mesh.vertices) {
+    const Eigen::Vector3f p(vertex.position[0], vertex.position[1], vertex.position[2]);
+    range.sphere_radius = std::max(range.sphere_radius, (p - range.sphere_center).norm());
+  }
+  return range;
+}
+
+// The six frustum planes (a, b, c, d), normals pointing inside and unit length,
+// of clip_from_world (Gribb & Hartmann).
+std::array<Eigen::Vector4f, 6> FrustumPlanes(const Eigen::Matrix4f& clip_from_world) {
+  std::array<Eigen::Vector4f, 6> planes;
+  const Eigen::Vector4f w = clip_from_world.row(3).transpose();
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector4f row = clip_from_world.row(axis).transpose();
+    planes[2 * axis] = w + row;
+    planes[2 * axis + 1] = w - row;
+  }
+  for (Eigen::Vector4f& plane : planes) plane /= plane.head<3>().norm();
+  return planes;
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+  uint32_t max_width = 0;
+  uint32_t max_height = 0;
+  std::vector<MeshRange> meshes;
+
+  GLuint program = 0;
+  GLint u_model = -1, u_view = -1, u_projection = -1, u_normal_matrix = -1, u_instance = -1, u_to_light = -1;
+  GLuint vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
+  GLuint framebuffer = 0;
+  GLuint color_targets[kAttachmentCount] = {};
+  GLuint depth_stencil_target = 0;
+  std::vector<GLuint> queries;  // grows to the most instances seen in a frame
+
+  // Per-frame scratch, kept to avoid allocating once warmed up.
+  std::vector<uint32_t> labelled_drawn;  // indices of labelled items that survived culling
+  std::vector<InstanceId> queried_instances;
+
+  Impl() = default;
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  // Here rather than in ~Renderer so a constructor that throws halfway still
+  // frees what it made (deleting name 0 is a no-op).
+  ~Impl() {
+    glDeleteQueries(static_cast<GLsizei>(queries.size()), queries.data());
+    glDeleteRenderbuffers(kAttachmentCount, color_targets);
+    glDeleteRenderbuffers(1, &depth_stencil_target);
+    glDeleteFramebuffers(1, &framebuffer);
+    glDeleteBuffers(1, &index_buffer);
+    glDeleteBuffers(1, &vertex_buffer);
+    glDeleteVertexArrays(1, &vertex_array);
+    glDeleteProgram(program);
+  }
+
+  void UploadMeshes(const std::vector<Mesh>& all_meshes);
+  void CreateFramebuffer();
+  bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
+  void Draw(const DrawItem& item) const;
+  void DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
+                 std::span<uint32_t> unoccluded_pixels);
+  void ReadBack(const CameraView& camera, const FrameBuffers& out) const;
+  void CountUnoccludedPixels(std::span<const DrawItem> items, std::span<uint32_t> unoccluded_pixels);
+};
+
+void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
+  std::vector<Vertex> vertices;
+  std::vector<uint32_t> indices;
+  for (const Mesh& mesh : all_meshes) {
+    MeshRange range = BoundingSphere(mesh);
+    range.first_index = indices.size();
+    range.index_count = static_cast<GLsizei>(mesh.indices.size());
+    const auto base_vertex = static_cast<uint32_t>(vertices.size());
+    for (uint32_t index : mesh.indices) {
+      SIM4CV_THROW_UNLESS(index < mesh.vertices.size(), "mesh " << meshes.size() << " has index " << index
+                                                                 << " past its " << mesh.vertices.size() << " vertices");
+      indices.push_back(base_vertex + index);  // one shared buffer, so indices are rebased
+    }
+    vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
+    meshes.push_back(range);
+  }
+  glGenVertexArrays(1, &vertex_array);
+  glBindVertexArray(vertex_array);
+  glGenBuffers(1, &vertex_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)), vertices.data(),
+               GL_STATIC_DRAW);
+  glGenBuffers(1, &index_buffer);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer);  // recorded in the vertex array
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(uint32_t)), indices.data(),
+               GL_STATIC_DRAW);
+  const auto attribute = [](GLuint location, size_t offset) {
+    glEnableVertexAttribArray(location);
+    glVertexAttribPointer(location, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(offset));
+  };
+  attribute(0, offsetof(Vertex, position));
+  attribute(1, offsetof(Vertex, normal));
+  attribute(2, offsetof(Vertex, color));
+}
+
+void Renderer::Impl::CreateFramebuffer() {
+  const GLenum formats[kAttachmentCount] = {GL_RGBA8, GL_R32F, GL_R16UI};
+  const auto width = static_cast<GLsizei>(max_width);
+  const auto height = static_cast<GLsizei>(max_height);
+  glGenFramebuffers(1, &framebuffer);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glGenRenderbuffers(kAttachmentCount, color_targets);
+  GLenum draw_buffers[kAttachmentCount];
+  for (GLuint i = 0; i < kAttachmentCount; ++i) {
+    glBindRenderbuffer(GL_RENDERBUFFER, color_targets[i]);
+    glRenderbufferStorage(GL_RENDERBUFFER, formats[i], width, height);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_RENDERBUFFER, color_targets[i]);
+    draw_buffers[i] = GL_COLOR_ATTACHMENT0 + i;
+  }
+  glGenRenderbuffers(1, &depth_stencil_target);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_stencil_target);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, width, height);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_target);
+  glDrawBuffers(kAttachmentCount, draw_buffers);  // framebuffer state: set once
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+    throw std::runtime_error("renderer framebuffer is incomplete");
+  }
+}
+
+bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const {
+  const MeshRange& mesh = meshes[item.mesh];
+  const Eigen::Vector3f center = item.world_from_model.topLeftCorner<3, 3>() * mesh.sphere_center +
+                                 item.world_from_model.block<3, 1>(0, 3);
+  const float largest_scale = item.world_from_model.topLeftCorner<3, 3>().colwise().norm().maxCoeff();
+  const float radius = mesh.sphere_radius * largest_scale;
+  return std::all_of(planes.begin(), planes.end(), [&](const Eigen::Vector4f& plane) {
+    return plane.head<3>().dot(center) + plane.w() >= -radius;
+  });
+}
+
+void Renderer::Impl::Draw(const DrawItem& item) const {
+  const MeshRange& mesh = meshes[item.mesh];
+  const Eigen::Matrix3f normal_matrix = item.world_from_model.topLeftCorner<3, 3>().inverse().transpose();
+  glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
+  glUniformMatrix3fv(u_normal_matrix, 1, GL_FALSE, normal_matrix.data());
+  glUniform1ui(u_instance, item.instance);
+  glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT,
+                 reinterpret_cast<const void*>(mesh.first_index * sizeof(uint32_t)));
+}
+
+void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
+                               std::span<uint32_t> unoccluded_pixels) {
+  const GLfloat infinite_depth[4] = {std::numeric_limits<float>::infinity(), 0.0f, 0.0f, 0.0f};
+  const GLuint no_instance[4] = {kUnlabelled, 0, 0, 0};
+  // Write masks first: clears obey them, and the previous frame's counting pass turned them off.
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glStencilMask(0xFF);
+  glDisable(GL_STENCIL_TEST);
+  glClearBufferfv(GL_COLOR, kColorAttachment, kBackground);
+  glClearBufferfv(GL_COLOR, kDepthAttachment, infinite_depth);
+  glClearBufferuiv(GL_COLOR, kInstanceAttachment, no_instance);
+  glClearBufferfi(GL_DEPTH_STENCIL, 0, 1.0f, 0);
+
+  labelled_drawn.clear();
+  for (uint32_t i = 0; i < items.size(); ++i) {
+    const DrawItem& item = items[i];
+    SIM4CV_THROW_UNLESS(item.mesh < meshes.size(), "draw item " << i << " names mesh " << item.mesh << " of "
+                                                                << meshes.size());
+    SIM4CV_THROW_UNLESS(item.instance < unoccluded_pixels.size(),
+                        "instance " << item.instance << " does not fit unoccluded_pixels of size "
+                                    << unoccluded_pixels.size());
+    if (meshes[item.mesh].index_count == 0 || !InFrustum(item, planes)) continue;
+    Draw(item);
+    if (item.instance != kUnlabelled) labelled_drawn.push_back(i);
+  }
+}
+
+void Renderer::Impl::ReadBack(const CameraView& camera, const FrameBuffers& out) const {
+  const auto width = static_cast<GLsizei>(camera.width);
+  const auto height = static_cast<GLsizei>(camera.height);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  const auto read = [&](Attachment attachment, GLenum format, GLenum type, void* destination) {
+    if (destination == nullptr) return;
+    glReadBuffer(GL_COLOR_ATTACHMENT0 + attachment);
+    glReadPixels(0, 0, width, height, format, type, destination);
+  };
+  read(kColorAttachment, GL_RGB, GL_UNSIGNED_BYTE, out.rgb);
+  read(kDepthAttachment, GL_RED, GL_FLOAT, out.depth);
+  read(kInstanceAttachment, GL_RED_INTEGER, GL_UNSIGNED_SHORT, out.mask);
+}
+
+// Each instance is drawn alone with the depth test off; the stencil lets a
+// pixel pass only the first time this instance covers it, so overlapping
+// triangles (and several items sharing the id) count once.
+void Renderer::Impl::CountUnoccludedPixels(std::span<const DrawItem> items, std::span<uint32_t> unoccluded_pixels) {
+  std::sort(labelled_drawn.begin(), labelled_drawn.end(), [&](uint32_t a, uint32_t b) {
+    return items[a].instance != items[b].instance ? items[a].instance < items[b].instance : a < b;
+  });
+  glDisable(GL_DEPTH_TEST);
+  glDepthMask(GL_FALSE);
+  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  glEnable(GL_STENCIL_TEST);
+  glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+
+  queried_instances.clear();
+  GLint reference = 0;  // the stencil holds 0 after DrawScene's clear
+  for (size_t first = 0; first < labelled_drawn.size();) {
+    const InstanceId instance = items[labelled_drawn[first]].instance;
+    if (reference == kMaxStencilReference) {
+      glClear(GL_STENCIL_BUFFER_BIT);
+      reference = 0;
+    }
+    ++reference;
+    glStencilFunc(GL_NOTEQUAL, reference, 0xFF);
+    if (queries.size() <= queried_instances.size()) {
+      queries.push_back(0);
+      glGenQueries(1, &queries.back());
+    }
+    glBeginQuery(GL_SAMPLES_PASSED, queries[queried_instances.size()]);
+    for (; first < labelled_drawn.size() && items[labelled_drawn[first]].instance == instance; ++first) {
+      Draw(items[labelled_drawn[first]]);
+    }
+    glEndQuery(GL_SAMPLES_PASSED);
+    queried_instances.push_back(instance);
+  }
+  for (size_t i = 0; i < queried_instances.size(); ++i) {
+    GLuint samples = 0;
+    glGetQueryObjectuiv(queries[i], GL_QUERY_RESULT, &samples);
+    unoccluded_pixels[queried_instances[i]] = samples;
+  }
+}
+
+Renderer::Renderer(const std::vector<Mesh>& meshes, uint32_t max_width, uint32_t max_height)
+    : impl_(std::make_unique<Impl>()) {
+  SIM4CV_THROW_UNLESS(max_width > 0 && max_height > 0, "render size " << max_width << "x" << max_height);
+  Impl& gl = *impl_;
+  gl.max_width = max_width;
+  gl.max_height = max_height;
+  gl.program = LinkProgram(kVertexShader, kFragmentShader);
+  gl.u_model = RequireUniform(gl.program, "u_model");
+  gl.u_view = RequireUniform(gl.program, "u_view");
+  gl.u_projection = RequireUniform(gl.program, "u_projection");
+  gl.u_normal_matrix = RequireUniform(gl.program, "u_normal_matrix");
+  gl.u_instance = RequireUniform(gl.program, "u_instance");
+  gl.u_to_light = RequireUniform(gl.program, "u_to_light");
+  gl.UploadMeshes(meshes);
+  gl.CreateFramebuffer();
+  ThrowOnGlError("Renderer setup");
+}
+
+Renderer::~Renderer() = default;
+
+void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
+                      std::span<uint32_t> unoccluded_pixels) {
+  Impl& gl = *impl_;
+  SIM4CV_THROW_UNLESS(camera.width > 0 && camera.height > 0 && camera.width <= gl.max_width &&
+                          camera.height <= gl.max_height,
+                      "camera size " << camera.width << "x" << camera.height << " outside 1x1.." << gl.max_width
+                                     << "x" << gl.max_height);
+  const Eigen::Matrix4f view = RigidInverse(camera.world_from_camera);
+  const Eigen::Matrix4f projection = Perspective(
+      camera.fov_y_deg, static_cast<float>(camera.width) / static_cast<float>(camera.height), camera.near_m,
+      camera.far_m);
+  // GL's window origin is the bottom-left; mirroring y in clip space puts the
+  // image's top row first in glReadPixels. The mirror also reverses winding.
+  const Eigen::Matrix4f top_row_first = Eigen::Vector4f(1.0f, -1.0f, 1.0f, 1.0f).asDiagonal() * projection;
+  const Eigen::Vector3f to_light = Eigen::Vector3f(-0.4f, 0.3f, 0.85f).normalized();
+
+  glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer);
+  glViewport(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height));
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CW);
+  glUseProgram(gl.program);
+  glBindVertexArray(gl.vertex_array);
+  glUniformMatrix4fv(gl.u_view, 1, GL_FALSE, view.data());
+  glUniformMatrix4fv(gl.u_projection, 1, GL_FALSE, top_row_first.data());
+  glUniform3fv(gl.u_to_light, 1, to_light.data());
+
+  gl.DrawScene(items, FrustumPlanes(projection * view), unoccluded_pixels);
+  gl.ReadBack(camera, out);
+  gl.CountUnoccludedPixels(items, unoccluded_pixels);
+  ThrowOnGlError("Renderer::Render");
+}
+
+}  // namespace sim4cv::render

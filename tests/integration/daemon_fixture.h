@@ -1,0 +1,41 @@
+// Helpers shared by the integration tests: a running daemon plus clients
+// connected to it through the real C++ client library.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sim4cv/client.h"
+#include "tests/support/daemon_process.h"
+
+namespace sim4cv::testing {
+
+inline const std::vector<proto::Channel> kAllChannels = {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK,
+                                                        proto::CHANNEL_BOXES};
+
+// A fresh daemon per test; its stderr is printed if the test fails, and a
+// test fails if the daemon did not exit 0 on SIGTERM.
+class DaemonTest : public ::testing::Test {
+ protected:
+  void StartDaemon(std::vector<std::string> args = {}) { daemon_ = std::make_unique<DaemonProcess>(std::move(args)); }
+
+  std::unique_ptr<Client> Connect(const std::string& name = "test") {
+    auto client = std::make_unique<Client>();
+    client->Connect("127.0.0.1", daemon_->tcp_port(), name);
+    return client;
+  }
+
+  void TearDown() override {
+    if (!daemon_) return;
+    EXPECT_TRUE(daemon_->running()) << "sim4cvd died during the test:\n" << daemon_->stderr_text();
+    EXPECT_EQ(daemon_->Stop(), 0) << daemon_->stderr_text();
+    if (HasFailure()) std::cerr << "---- sim4cvd stderr ----\n" << daemon_->stderr_text();
+  }
+
+  std::unique_ptr<DaemonProcess> daemon_;
+};
+
+}  // namespace sim4cv::testing

@@ -1,0 +1,5 @@
+# One line per unit test: sim4cv_test(unit NAME LIBS...)
+sim4cv_test(unit ground_truth_test sim4cv_render)
+sim4cv_test(unit mesh_builder_test sim4cv_render)
+sim4cv_test(unit renderer_test sim4cv_render)
+sim4cv_test(unit client_test sim4cv_client)
