@@ -44,6 +44,8 @@ Usage: sim4cvd [flags]
                             realtime: simulated time follows wall time, newest frame only (default lockstep)
   --max-message-bytes N     largest Envelope a client may send (default 67108864)
   --max-clients N           most simultaneous connections (default 64)
+  --tcp-send-buffer N       kernel send buffer per TCP connection in bytes, 0 = kernel default
+                            (default 262144: small, so slow newest-frame readers get fresh frames)
   --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --help                    this text
 
@@ -72,6 +74,8 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--max-message-bytes",
        [&](auto& f, auto& v) { config.max_message_bytes = ParseNumber<uint32_t>(f, v, 16, 1u << 30); }},
       {"--max-clients", [&](auto& f, auto& v) { config.max_clients = ParseNumber<uint32_t>(f, v, 1, 100000); }},
+      {"--tcp-send-buffer",
+       [&](auto& f, auto& v) { config.tcp_send_buffer_bytes = ParseNumber<uint32_t>(f, v, 0, 1u << 30); }},
       {"--log-level",
        [&](auto& f, auto& v) {
          SIM4CV_THROW_UNLESS(v == "debug" || v == "info" || v == "warning" || v == "error",

@@ -22,6 +22,7 @@ struct Config {
   proto::SimMode mode = proto::SIM_MODE_LOCKSTEP;
   uint32_t max_message_bytes = 64u << 20;
   uint32_t max_clients = 64;
+  uint32_t tcp_send_buffer_bytes = 256u << 10;
   std::string log_level = "info";
 
   // Physics steps per frame; physics_hz must be a whole multiple of frame_hz.

@@ -60,7 +60,8 @@ int RunDaemon(const Config& config) {
 
   std::vector<std::unique_ptr<transport::Transport>> transports;
   transports.push_back(transport::MakeTcpTransport(
-      {config.bind_address, config.tcp_port, config.max_clients, config.max_message_bytes}));
+      {config.bind_address, config.tcp_port, config.max_clients, config.max_message_bytes,
+       config.tcp_send_buffer_bytes}));
 
   session::CommandQueue commands;
   session::LatestState latest_state;
@@ -71,7 +72,7 @@ int RunDaemon(const Config& config) {
   for (auto& t : transports) t->Start(context);
 
   std::string line = "sim4cvd listening";
-  for (const auto& t : transports) line += " " + t->listening_field();
+  for (const auto& t : transports) line.append(" ").append(t->listening_field());
   std::printf("%s\n", line.c_str());
   std::fflush(stdout);
   LOG_INFO("scene '" << scene.name << "', " << config.width << "x" << config.height << ", "

@@ -1,2 +1,6 @@
 # One line per integration test (real sim4cvd on loopback): sim4cv_test(integration NAME LIBS...)
 sim4cv_test(integration handshake_test sim4cv_client)
+sim4cv_test(integration bad_input_test sim4cv_client)
+sim4cv_test(integration delivery_test sim4cv_client)
+sim4cv_test(integration ground_truth_integration_test sim4cv_client Eigen3::Eigen)
+sim4cv_test(integration determinism_test sim4cv_client)

@@ -9,11 +9,12 @@ namespace asio = boost::asio;
 using Outcome = session::ClientProtocol::Outcome;
 
 TcpSession::TcpSession(asio::ip::tcp::socket socket, session::ClientId client, const session::ServerContext& context,
-                       OnClosed on_closed)
+                       uint32_t send_buffer_bytes, OnClosed on_closed)
     : socket_(std::move(socket)), client_(client), context_(context), on_closed_(std::move(on_closed)) {
   frame_buffers_.reserve(8);
   boost::system::error_code ignored;
   socket_.set_option(asio::ip::tcp::no_delay(true), ignored);  // frames must leave at once
+  if (send_buffer_bytes > 0) socket_.set_option(asio::socket_base::send_buffer_size(static_cast<int>(send_buffer_bytes)), ignored);
 }
 
 void TcpSession::Start() {

@@ -22,7 +22,7 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   using OnClosed = std::function<void(session::ClientId)>;
 
   TcpSession(boost::asio::ip::tcp::socket socket, session::ClientId client, const session::ServerContext& context,
-             OnClosed on_closed);
+             uint32_t send_buffer_bytes, OnClosed on_closed);
 
   // Starts reading. Must be called once, on the Asio thread, after
   // construction through make_shared.

@@ -70,7 +70,7 @@ class TcpTransport : public Transport {
         return;
       }
       const session::ClientId id = session::NewClientId();
-      auto session = std::make_shared<TcpSession>(std::move(socket), id, *context_,
+      auto session = std::make_shared<TcpSession>(std::move(socket), id, *context_, options_.send_buffer_bytes,
                                                   [this](session::ClientId closed) { sessions_.erase(closed); });
       if (sessions_.size() >= options_.max_clients) {
         session->Reject(proto::ERROR_CODE_TOO_MANY_CLIENTS,

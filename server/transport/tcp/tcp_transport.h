@@ -15,6 +15,9 @@ struct TcpOptions {
   uint16_t port = 0;  // 0: any free port
   uint32_t max_clients = 64;
   uint32_t max_message_bytes = 64u << 20;
+  // Kernel send buffer per connection. Small, so that a slow newest-frame
+  // reader gets recent frames instead of a backlog queued in the kernel.
+  uint32_t send_buffer_bytes = 256u << 10;
 };
 
 // Binds and listens at once (so the port is known); serves after Start.
