@@ -47,9 +47,11 @@ UavSetpoint FollowCar(const UavSpec& uav, double pitch_down_deg, const BodyState
   const double behind = uav.altitude / std::tan(pitch_down_deg * std::numbers::pi / 180.0);
   UavSetpoint setpoint;
   setpoint.position = car.position + Eigen::Vector3d(-std::cos(yaw) * behind, -std::sin(yaw) * behind, uav.altitude);
-  setpoint.velocity = car.linear_velocity;
+  // The offset behind the car turns with it, so its rate of change joins the car's velocity.
+  const double yaw_rate = car.angular_velocity.z();
+  setpoint.velocity = car.linear_velocity + Eigen::Vector3d(std::sin(yaw), -std::cos(yaw), 0.0) * behind * yaw_rate;
   setpoint.yaw = yaw;
-  setpoint.yaw_rate = car.angular_velocity.z();
+  setpoint.yaw_rate = yaw_rate;
   return setpoint;
 }
 
