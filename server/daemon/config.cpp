@@ -4,6 +4,7 @@
 #include <functional>
 #include <map>
 #include <sstream>
+#include <type_traits>
 
 #include "server/common/check.h"
 
@@ -12,6 +13,9 @@ namespace {
 
 template <typename T>
 T ParseNumber(const std::string& flag, const std::string& text, T low, T high) {
+  // istream >> unsigned accepts "-1" and wraps it; refuse the sign instead.
+  SIM4CV_THROW_UNLESS(std::is_signed_v<T> || text.find('-') == std::string::npos,
+                      flag << " is " << text << "; it must be in [" << low << ", " << high << "]");
   std::istringstream in(text);
   T value{};
   in >> value;
@@ -46,10 +50,19 @@ Usage: sim4cvd [flags]
   --max-clients N           most simultaneous connections (default 64)
   --tcp-send-buffer N       kernel send buffer per TCP connection in bytes, 0 = kernel default
                             (default 262144: small, so slow newest-frame readers get fresh frames)
+  --udp-port N              UDP port; 0 picks any free port, -1 turns UDP off (default 0)
+  --udp-datagram-bytes N    largest datagram the daemon sends; frames are chunked to fit
+                            (default 65000 for loopback; 1472 for a 1500-byte MTU network)
+  --udp-expiry-ms N         a UDP client's registration lapses after this much silence (default 5000)
+  --shm-name NAME           serve frames through the POSIX shared-memory object /NAME (default: off)
+  --shm-camera NAME         the camera the shared-memory ring carries (default uav)
+  --shm-slots N             frame slots in the shared-memory ring (default 8)
+  --shm-expiry-ms N         a shared-memory client silent this long is disconnected (default 5000)
   --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --help                    this text
 
-When ready it prints one line on stdout: `sim4cvd listening tcp=PORT`.
+When ready it prints one line on stdout, e.g. `sim4cvd listening tcp=PORT udp=PORT shm=/NAME`
+(a field per transport that is on).
 SIGINT or SIGTERM end it cleanly.
 )";
 }
@@ -76,6 +89,19 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--max-clients", [&](auto& f, auto& v) { config.max_clients = ParseNumber<uint32_t>(f, v, 1, 100000); }},
       {"--tcp-send-buffer",
        [&](auto& f, auto& v) { config.tcp_send_buffer_bytes = ParseNumber<uint32_t>(f, v, 0, 1u << 30); }},
+      {"--udp-port", [&](auto& f, auto& v) { config.udp_port = ParseNumber<int32_t>(f, v, -1, 65535); }},
+      {"--udp-datagram-bytes",
+       [&](auto& f, auto& v) { config.udp_datagram_bytes = ParseNumber<uint32_t>(f, v, 576, 65000); }},
+      {"--udp-expiry-ms", [&](auto& f, auto& v) { config.udp_expiry_ms = ParseNumber<uint32_t>(f, v, 10, 3600000); }},
+      {"--shm-name",
+       [&](auto& f, auto& v) {
+         SIM4CV_THROW_UNLESS(!v.empty() && v != "/" && v.size() < 200 && v.find('/', 1) == std::string::npos,
+                             f << " '" << v << "' must be a short name without '/' after the first character");
+         config.shm_name = v[0] == '/' ? v : "/" + v;
+       }},
+      {"--shm-camera", [&](auto&, auto& v) { config.shm_camera = v; }},
+      {"--shm-slots", [&](auto& f, auto& v) { config.shm_slots = ParseNumber<uint32_t>(f, v, 2, 1024); }},
+      {"--shm-expiry-ms", [&](auto& f, auto& v) { config.shm_expiry_ms = ParseNumber<uint32_t>(f, v, 10, 3600000); }},
       {"--log-level",
        [&](auto& f, auto& v) {
          SIM4CV_THROW_UNLESS(v == "debug" || v == "info" || v == "warning" || v == "error",

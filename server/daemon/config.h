@@ -23,6 +23,13 @@ struct Config {
   uint32_t max_message_bytes = 64u << 20;
   uint32_t max_clients = 64;
   uint32_t tcp_send_buffer_bytes = 256u << 10;
+  int32_t udp_port = 0;  // -1: no UDP transport
+  uint32_t udp_datagram_bytes = 65000;
+  uint32_t udp_expiry_ms = 5000;
+  std::string shm_name;  // empty: no shared-memory transport
+  std::string shm_camera = "uav";
+  uint32_t shm_slots = 8;
+  uint32_t shm_expiry_ms = 5000;  // a silent shared-memory client is disconnected after this
   std::string log_level = "info";
 
   // Physics steps per frame; physics_hz must be a whole multiple of frame_hz.

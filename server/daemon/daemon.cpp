@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "protocol/framing.h"
+#include "server/common/check.h"
 #include "server/common/log.h"
 #include "server/daemon/sim_thread.h"
 #include "server/daemon/state_message.h"
@@ -65,8 +66,9 @@ int RunDaemon(const Config& config) {
 
   session::CommandQueue commands;
   session::LatestState latest_state;
-  const session::ServerContext context{scene, config.mode, MakeWelcome(config, scene, transports), commands,
-                                       latest_state, config.max_message_bytes};
+  session::Counters counters;
+  const session::ServerContext context{scene,        config.mode,     MakeWelcome(config, scene, transports), commands,
+                                       latest_state, config.max_message_bytes, counters};
   SimThread sim(config, scene, commands, latest_state);
   sim.Start();
   for (auto& t : transports) t->Start(context);
@@ -85,6 +87,7 @@ int RunDaemon(const Config& config) {
   sim.Stop();  // no new frames from here on
   for (auto& t : transports) t->Stop();
   transports.clear();  // sessions release their frames before the sim's pools go
+  for (const auto& [name, value] : counters.Snapshot()) LOG_INFO("counter " << name << " = " << value);
   LOG_INFO("stopped cleanly");
   return 0;
 }

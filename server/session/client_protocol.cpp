@@ -68,11 +68,12 @@ Outcome ClientProtocol::Handle(const proto::Envelope& request, proto::Envelope& 
     case Kind::kControls: return HandleControls(request.controls(), reply);
     case Kind::kTrackerOutput: return HandleTrackerOutput(request.tracker_output(), reply);
     case Kind::kGetState: return HandleGetState(reply);
+    case Kind::kGetStats: return HandleGetStats(reply);
     default:
       return Refuse(proto::ERROR_CODE_UNEXPECTED_MESSAGE,
                     "envelope field " + std::to_string(static_cast<int>(kind)) +
                         " is a message only the server sends; clients send Hello, Subscribe, Step, TrackerOutput, "
-                        "Controls or GetState",
+                        "Controls, GetState or GetStats",
                     true, reply);
   }
 }
@@ -201,6 +202,12 @@ Outcome ClientProtocol::HandleGetState(proto::Envelope& reply) {
   for (std::size_t i = 0; i < snapshot->tracker_clients.size(); ++i) {
     if (snapshot->tracker_clients[i] == client_) *state->mutable_last_tracker_output() = snapshot->tracker_outputs[i];
   }
+  return Outcome::kReply;
+}
+
+Outcome ClientProtocol::HandleGetStats(proto::Envelope& reply) {
+  auto& counters = *reply.mutable_stats()->mutable_counters();
+  for (const auto& [name, value] : context_.counters.Snapshot()) counters[name] = value;
   return Outcome::kReply;
 }
 

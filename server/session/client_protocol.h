@@ -54,6 +54,7 @@ class ClientProtocol {
   Outcome HandleControls(const proto::Controls& controls, proto::Envelope& reply);
   Outcome HandleTrackerOutput(const proto::TrackerOutput& output, proto::Envelope& reply);
   Outcome HandleGetState(proto::Envelope& reply);
+  Outcome HandleGetStats(proto::Envelope& reply);
 
   ClientId client_;
   const ServerContext& context_;

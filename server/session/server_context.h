@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "server/session/command_queue.h"
+#include "server/session/counters.h"
 #include "server/session/frame.h"
 #include "server/sim/scene.h"
 #include "sim4cv.pb.h"
@@ -36,6 +37,7 @@ struct ServerContext {
   CommandQueue& commands;
   LatestState& latest_state;
   uint32_t max_message_bytes;
+  Counters& counters;
 };
 
 }  // namespace sim4cv::session

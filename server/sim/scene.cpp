@@ -1,6 +1,7 @@
 #include "server/sim/scene.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -22,13 +23,18 @@ namespace {
 // Reads exactly `count` numbers from the rest of a line.
 std::vector<float> ReadNumbers(std::istringstream& words, std::size_t count, int line_number, const std::string& line) {
   std::vector<float> values;
-  float v = 0;
-  while (words >> v) values.push_back(v);
-  SIM4CV_THROW_UNLESS(values.size() == count && words.eof(),
-                      "scene line " << line_number << " '" << line << "': expected " << count << " numbers");
-  for (float x : values) {
-    SIM4CV_THROW_UNLESS(std::isfinite(x), "scene line " << line_number << " '" << line << "': number not finite");
+  std::string token;
+  while (words >> token) {
+    // strtof, unlike operator>>, reads "inf" and "nan", so they get their own message.
+    char* end = nullptr;
+    const float value = std::strtof(token.c_str(), &end);
+    SIM4CV_THROW_UNLESS(end != token.c_str() && *end == '\0',
+                        "scene line " << line_number << " '" << line << "': '" << token << "' is not a number");
+    SIM4CV_THROW_UNLESS(std::isfinite(value), "scene line " << line_number << " '" << line << "': number not finite");
+    values.push_back(value);
   }
+  SIM4CV_THROW_UNLESS(values.size() == count,
+                      "scene line " << line_number << " '" << line << "': expected " << count << " numbers");
   return values;
 }
 

@@ -1,0 +1,227 @@
+// Unit tests of the lockstep scheduler (server/session/scheduler.*).
+#include "server/session/scheduler.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+#include "tests/support/no_warnings.h"
+
+namespace sim4cv::session {
+namespace {
+
+// Records the frames offered to it, tagged with its own name.
+class RecordingLink : public ClientLink {
+ public:
+  RecordingLink(int tag, std::vector<std::pair<int, uint64_t>>* log) : tag_(tag), log_(log) {}
+  void OfferFrame(const FrameRef& frame) override {
+    frames.push_back(frame->frame_id);
+    if (log_) log_->emplace_back(tag_, frame->frame_id);
+  }
+  std::vector<uint64_t> frames;
+
+ private:
+  int tag_;
+  std::vector<std::pair<int, uint64_t>>* log_;
+};
+
+class SchedulerTest : public ::testing::Test {
+ protected:
+  std::shared_ptr<RecordingLink> Link(int tag) { return std::make_shared<RecordingLink>(tag, &delivery_log_); }
+
+  FrameRef MakeFrame(uint64_t id, uint32_t camera) {
+    Frame* frame = nullptr;
+    FrameRef ref = pool_.Acquire(&frame);
+    frame->frame_id = id;
+    frame->camera_index = camera;
+    return ref;
+  }
+
+  FramePool pool_;
+  std::vector<std::pair<int, uint64_t>> delivery_log_;
+  Scheduler scheduler_;
+};
+
+TEST_F(SchedulerTest, NoSubscribersIsNotReady) {
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  EXPECT_EQ(scheduler_.subscriber_count(), 0u);
+  scheduler_.AddStep(7);  // unknown client: ignored
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  EXPECT_FALSE(scheduler_.CameraWanted(0));
+}
+
+TEST_F(SchedulerTest, SingleLockstepClientNeedsAStep) {
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(1);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+  scheduler_.ConsumeSteps();
+  EXPECT_FALSE(scheduler_.LockstepReady());
+}
+
+TEST_F(SchedulerTest, TwoLockstepClientsReadyOnlyWhenBothStepped) {
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(1);
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(1);  // a second credit for 1 does not stand in for 2
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(2);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+  // ConsumeSteps takes exactly one from each: 1 still holds one, 2 none.
+  scheduler_.ConsumeSteps();
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(2);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+  scheduler_.ConsumeSteps();
+  EXPECT_FALSE(scheduler_.LockstepReady());
+}
+
+TEST_F(SchedulerTest, CreditsAccumulate) {
+  scheduler_.Subscribe(3, 0, proto::DELIVERY_LOCKSTEP, Link(3));
+  for (int i = 0; i < 5; ++i) scheduler_.AddStep(3);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_TRUE(scheduler_.LockstepReady()) << "round " << i;
+    scheduler_.ConsumeSteps();
+  }
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.ConsumeSteps();  // with no credits: stays at zero, no underflow
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(3);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+}
+
+TEST_F(SchedulerTest, NewestSubscribersNeverMakeItReadyButReceiveFrames) {
+  auto newest = Link(1);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, newest);
+  scheduler_.AddStep(1);  // ignored for newest-frame subscribers
+  scheduler_.AddStep(1);
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  EXPECT_TRUE(scheduler_.CameraWanted(0));
+  scheduler_.Deliver(MakeFrame(11, 0));
+  EXPECT_EQ(newest->frames, std::vector<uint64_t>{11});
+
+  // Alongside a lockstep client, only the lockstep client gates.
+  auto lockstep = Link(2);
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, lockstep);
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(2);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+  scheduler_.ConsumeSteps();
+  scheduler_.Deliver(MakeFrame(12, 0));
+  EXPECT_EQ(newest->frames, (std::vector<uint64_t>{11, 12}));
+  EXPECT_EQ(lockstep->frames, std::vector<uint64_t>{12});
+}
+
+TEST_F(SchedulerTest, RemoveUnblocksTheOthers) {
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  scheduler_.AddStep(1);
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.Remove(2);
+  EXPECT_EQ(scheduler_.subscriber_count(), 1u);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+  scheduler_.Remove(1);
+  EXPECT_EQ(scheduler_.subscriber_count(), 0u);
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.Remove(42);  // unknown: harmless
+  EXPECT_EQ(scheduler_.subscriber_count(), 0u);
+}
+
+TEST_F(SchedulerTest, RemovedClientGetsNoFrames) {
+  auto a = Link(1);
+  auto b = Link(2);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, a);
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, b);
+  scheduler_.Remove(1);
+  scheduler_.Deliver(MakeFrame(5, 0));
+  EXPECT_TRUE(a->frames.empty());
+  EXPECT_EQ(b->frames, std::vector<uint64_t>{5});
+}
+
+TEST_F(SchedulerTest, ResubscribeResetsCredits) {
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  scheduler_.AddStep(1);
+  scheduler_.AddStep(1);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  EXPECT_EQ(scheduler_.subscriber_count(), 1u);  // replaced, not added
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.AddStep(1);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+}
+
+TEST_F(SchedulerTest, ResubscribeAsNewestStopsGating) {
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  scheduler_.AddStep(1);
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, Link(2));
+  EXPECT_TRUE(scheduler_.LockstepReady());
+}
+
+TEST_F(SchedulerTest, ResubscribeReplacesTheLinkAndCamera) {
+  auto old_link = Link(1);
+  auto new_link = Link(1);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, old_link);
+  scheduler_.Subscribe(1, 1, proto::DELIVERY_NEWEST, new_link);
+  EXPECT_FALSE(scheduler_.CameraWanted(0));
+  EXPECT_TRUE(scheduler_.CameraWanted(1));
+  scheduler_.Deliver(MakeFrame(1, 1));
+  EXPECT_TRUE(old_link->frames.empty());
+  EXPECT_EQ(new_link->frames, std::vector<uint64_t>{1});
+}
+
+TEST_F(SchedulerTest, DeliverReachesOnlyThatCamerasSubscribersInClientIdOrder) {
+  // Subscribed out of id order, across two cameras.
+  auto c5 = Link(5);
+  auto c2 = Link(2);
+  auto c9 = Link(9);
+  auto c1 = Link(1);
+  scheduler_.Subscribe(5, 0, proto::DELIVERY_NEWEST, c5);
+  scheduler_.Subscribe(2, 1, proto::DELIVERY_NEWEST, c2);
+  scheduler_.Subscribe(9, 0, proto::DELIVERY_LOCKSTEP, c9);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, c1);
+  EXPECT_TRUE(scheduler_.CameraWanted(0));
+  EXPECT_TRUE(scheduler_.CameraWanted(1));
+  EXPECT_FALSE(scheduler_.CameraWanted(2));
+
+  scheduler_.Deliver(MakeFrame(100, 0));
+  scheduler_.Deliver(MakeFrame(101, 1));
+  scheduler_.Deliver(MakeFrame(102, 0));
+  const std::vector<std::pair<int, uint64_t>> expected = {
+      {1, 100}, {5, 100}, {9, 100}, {2, 101}, {1, 102}, {5, 102}, {9, 102}};
+  EXPECT_EQ(delivery_log_, expected);
+  EXPECT_EQ(c2->frames, std::vector<uint64_t>{101});
+  EXPECT_EQ(c9->frames, (std::vector<uint64_t>{100, 102}));
+}
+
+TEST_F(SchedulerTest, DeliverSharesOneFrameWithoutCopying) {
+  // Every link sees the same pooled object; after delivery (the links keep no
+  // refs here) it goes back to the pool.
+  struct AddressLink : ClientLink {
+    void OfferFrame(const FrameRef& frame) override { addresses.push_back(&*frame); }
+    std::vector<const Frame*> addresses;
+  };
+  auto a = std::make_shared<AddressLink>();
+  auto b = std::make_shared<AddressLink>();
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, a);
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, b);
+  {
+    const FrameRef frame = MakeFrame(1, 0);
+    scheduler_.Deliver(frame);
+    ASSERT_EQ(a->addresses.size(), 1u);
+    ASSERT_EQ(b->addresses.size(), 1u);
+    EXPECT_EQ(a->addresses[0], &*frame);
+    EXPECT_EQ(b->addresses[0], &*frame);
+  }
+  EXPECT_EQ(pool_.size(), 1u);
+  Frame* again = nullptr;
+  const FrameRef reused = pool_.Acquire(&again);
+  EXPECT_EQ(again, a->addresses[0]);
+}
+
+}  // namespace
+}  // namespace sim4cv::session

@@ -1,0 +1,205 @@
+// Unit tests of the Bullet world (server/sim/world.*), with real Bullet.
+#include "server/sim/world.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "server/sim/controllers.h"
+#include "tests/support/no_warnings.h"
+
+namespace sim4cv::sim {
+namespace {
+
+constexpr double kDt = 1.0 / 240.0;
+
+int Steps(double seconds) { return static_cast<int>(std::lround(seconds / kDt)); }
+
+double ForwardSpeed(const BodyState& body) {
+  const double yaw = body.Yaw();
+  return body.linear_velocity.head<2>().dot(Eigen::Vector2d(std::cos(yaw), std::sin(yaw)));
+}
+
+double LaneDistance(const World& world, const BodyState& body) {
+  const Eigen::Vector2d p = body.position.head<2>();
+  return (world.car_lane().Project(p).point - p).norm();
+}
+
+class WorldTest : public ::testing::Test {
+ protected:
+  const Scene scene_ = DefaultScene(320, 180);
+};
+
+TEST_F(WorldTest, InitialStateIsOnTheLaneAndOnStation) {
+  World world(scene_);
+  const State state = world.InitialState();
+  EXPECT_EQ(state.physics_steps, 0u);
+  EXPECT_EQ(state.sim_time, 0.0);
+  EXPECT_LT(LaneDistance(world, state.car), 1e-6);
+  EXPECT_NEAR(state.car.position.z(), scene_.car.height / 2.0, 1e-6);
+  const UavSetpoint station = FollowCar(scene_.uav, scene_.cameras[0].pitch_down_deg, state.car);
+  EXPECT_LT((state.uav.position - station.position).norm(), 1e-9);
+  // The lane is the road shifted by half a lane to the right: for the
+  // counter-clockwise default loop, outward, so it is longer than the road.
+  std::vector<Eigen::Vector2d> road;
+  for (const auto& p : scene_.road_loop) road.push_back(p.cast<double>());
+  EXPECT_GT(world.car_lane().length(), ClosedPath(road).length());
+  const auto on_road = ClosedPath(road).Project(state.car.position.head<2>());
+  // Half a lane, a little more at a bend (the corner point moves along the
+  // bisector, by offset / cos(half the turn)).
+  EXPECT_NEAR((on_road.point - state.car.position.head<2>()).norm(), scene_.lane_width / 2.0, 0.01);
+}
+
+// Runs the autopilot for 20 s of sim time at 240 Hz, calling `check(state)`
+// after every step.
+template <typename Check>
+State DriveAutopilot(World& world, Check check) {
+  State state = world.InitialState();
+  for (int i = 0; i < Steps(20.0); ++i) {
+    world.Step(state, kDt);
+    check(state);
+  }
+  return state;
+}
+
+// Cruise speed, lane keeping and ground contact.
+TEST_F(WorldTest, AutopilotKeepsCruiseSpeedLaneAndGround) {
+  World world(scene_);
+  const double ground_z = scene_.car.height / 2.0;
+  double worst_lane = 0, worst_z = 0, min_late_speed = 1e9, max_late_speed = 0;
+  const State state = DriveAutopilot(world, [&](const State& s) {
+    worst_lane = std::max(worst_lane, LaneDistance(world, s.car));
+    worst_z = std::max(worst_z, std::abs(s.car.position.z() - ground_z));
+    if (s.sim_time > 10.0) {
+      min_late_speed = std::min(min_late_speed, ForwardSpeed(s.car));
+      max_late_speed = std::max(max_late_speed, ForwardSpeed(s.car));
+    }
+  });
+  EXPECT_EQ(state.physics_steps, static_cast<uint64_t>(Steps(20.0)));
+  EXPECT_NEAR(state.sim_time, 20.0, 1e-9);
+  EXPECT_FALSE(state.car_command.manual);
+  const double cruise = scene_.car.cruise_speed;
+  EXPECT_NEAR(ForwardSpeed(state.car), cruise, 0.1 * cruise);
+  EXPECT_GE(min_late_speed, 0.9 * cruise);
+  EXPECT_LE(max_late_speed, 1.1 * cruise);
+  EXPECT_LE(worst_lane, 1.0);
+  EXPECT_LE(worst_z, 0.05);
+  // It covered ground (~6 m/s for ~18 s) and went round the first bend.
+  EXPECT_GT((state.car.position - world.InitialState().car.position).norm(), 60.0);
+  EXPECT_GT(WrapAngle(state.car.Yaw() - world.InitialState().car.Yaw()), 0.5);
+}
+
+// Regression (fixed in 0c89881): FollowCar fed forward only the car's linear
+// velocity, not the setpoint's rate of change (car velocity + yaw_rate x
+// behind-offset); in the default scene's first bend (t ~ 15..20 s, yaw rate
+// ~0.27 rad/s, offset 8.66 m) the UAV lagged its setpoint by ~1.95 m. With the
+// rotational term it stays within ~0.6 m (the worst is while the car
+// accelerates from rest).
+TEST_F(WorldTest, UavStaysNearItsFollowCarSetpoint) {
+  World world(scene_);
+  double worst_uav = 0;
+  double worst_at = 0;
+  DriveAutopilot(world, [&](const State& s) {
+    if (s.sim_time <= 2.0) return;
+    const UavSetpoint setpoint = FollowCar(scene_.uav, scene_.cameras[0].pitch_down_deg, s.car);
+    const double error = (s.uav.position - setpoint.position).norm();
+    if (error > worst_uav) {
+      worst_uav = error;
+      worst_at = s.sim_time;
+    }
+  });
+  EXPECT_LE(worst_uav, 1.5) << "worst at t = " << worst_at << " s";
+}
+
+void ExpectBodiesIdentical(const BodyState& a, const BodyState& b) {
+  EXPECT_TRUE(a.position == b.position) << a.position.transpose() << " vs " << b.position.transpose();
+  EXPECT_TRUE(a.orientation.coeffs() == b.orientation.coeffs());
+  EXPECT_TRUE(a.linear_velocity == b.linear_velocity);
+  EXPECT_TRUE(a.angular_velocity == b.angular_velocity);
+}
+
+TEST_F(WorldTest, TwoWorldsSteppedIdenticallyAreBitIdentical) {
+  World world_a(scene_);
+  World world_b(scene_);
+  State a = world_a.InitialState();
+  State b = world_b.InitialState();
+  for (int i = 0; i < Steps(5.0); ++i) {
+    if (i == Steps(3.0)) {
+      a.car_command = b.car_command = CarCommand{0.3f, 0.5f, 0.0f, true};
+    }
+    world_a.Step(a, kDt);
+    world_b.Step(b, kDt);
+  }
+  ExpectBodiesIdentical(a.car, b.car);
+  ExpectBodiesIdentical(a.uav, b.uav);
+  EXPECT_EQ(a.physics_steps, b.physics_steps);
+  EXPECT_EQ(a.sim_time, b.sim_time);
+  // And something actually moved.
+  EXPECT_GT((a.car.position - world_a.InitialState().car.position).norm(), 5.0);
+}
+
+// World::Step promises "the same state and commands give the same result":
+// a fresh World handed a mid-run State continues exactly like the one that
+// produced it (what replay from a logged State relies on).
+TEST_F(WorldTest, SameStateInSameStateOutAcrossWorlds) {
+  World first(scene_);
+  State state = first.InitialState();
+  for (int i = 0; i < Steps(4.0); ++i) first.Step(state, kDt);
+  State copy = state;
+  World second(scene_);
+  for (int i = 0; i < Steps(1.0); ++i) {
+    first.Step(state, kDt);
+    second.Step(copy, kDt);
+  }
+  ExpectBodiesIdentical(state.car, copy.car);
+  ExpectBodiesIdentical(state.uav, copy.uav);
+}
+
+TEST_F(WorldTest, ManualBrakeStopsWithoutReversingAndHolds) {
+  World world(scene_);
+  State state = world.InitialState();
+  for (int i = 0; i < Steps(6.0); ++i) world.Step(state, kDt);
+  ASSERT_GT(ForwardSpeed(state.car), 3.0);
+
+  state.car_command = CarCommand{0.0f, 0.0f, 1.0f, true};
+  double min_forward = 1e9;
+  for (int i = 0; i < Steps(3.0); ++i) {
+    world.Step(state, kDt);
+    min_forward = std::min(min_forward, ForwardSpeed(state.car));
+  }
+  EXPECT_TRUE(state.car_command.manual);  // Step leaves a manual command alone
+  EXPECT_FLOAT_EQ(state.car_command.brake, 1.0f);
+  EXPECT_LT(state.car.linear_velocity.norm(), 0.1);
+  EXPECT_GE(min_forward, -1e-3) << "the brake reversed the car";
+
+  // Held on the brake, with no throttle, for 10 s: it stays put.
+  const Eigen::Vector3d stopped_at = state.car.position;
+  for (int i = 0; i < Steps(10.0); ++i) world.Step(state, kDt);
+  EXPECT_LT((state.car.position - stopped_at).head<2>().norm(), 0.01);
+}
+
+TEST_F(WorldTest, NoCreepAtStandstillWithoutThrottle) {
+  World world(scene_);
+  State state = world.InitialState();
+  state.car_command = CarCommand{0.0f, 0.0f, 0.0f, true};
+  const Eigen::Vector3d start = state.car.position;
+  for (int i = 0; i < Steps(10.0); ++i) world.Step(state, kDt);
+  EXPECT_LT((state.car.position - start).head<2>().norm(), 0.01);
+  EXPECT_NEAR(state.car.position.z(), scene_.car.height / 2.0, 0.05);
+}
+
+TEST_F(WorldTest, ManualThrottleAcceleratesAndSteeringTurnsRight) {
+  World world(scene_);
+  State state = world.InitialState();
+  const double yaw0 = state.car.Yaw();
+  state.car_command = CarCommand{0.5f, 1.0f, 0.0f, true};
+  for (int i = 0; i < Steps(2.0); ++i) world.Step(state, kDt);
+  // Full throttle (3 m/s^2) minus a little rolling drag for 2 s.
+  EXPECT_NEAR(ForwardSpeed(state.car), 6.0, 0.5);
+  // Positive steering turns right: clockwise, the yaw decreases.
+  EXPECT_LT(WrapAngle(state.car.Yaw() - yaw0), -0.1);
+}
+
+}  // namespace
+}  // namespace sim4cv::sim
