@@ -11,7 +11,9 @@
 #include "server/common/log.h"
 #include "server/daemon/sim_thread.h"
 #include "server/daemon/state_message.h"
+#include "server/transport/shm/shm_transport.h"
 #include "server/transport/tcp/tcp_transport.h"
+#include "server/transport/udp/udp_transport.h"
 
 namespace sim4cv::daemon {
 namespace {
@@ -63,6 +65,22 @@ int RunDaemon(const Config& config) {
   transports.push_back(transport::MakeTcpTransport(
       {config.bind_address, config.tcp_port, config.max_clients, config.max_message_bytes,
        config.tcp_send_buffer_bytes}));
+  if (config.udp_port >= 0) {
+    transports.push_back(transport::MakeUdpTransport({config.bind_address, static_cast<uint16_t>(config.udp_port),
+                                                      config.udp_datagram_bytes, config.udp_expiry_ms,
+                                                      config.max_clients}));
+  }
+  if (!config.shm_name.empty()) {
+    const int shm_camera = scene.FindCamera(config.shm_camera);
+    SIM4CV_THROW_UNLESS(shm_camera >= 0,
+                        "--shm-camera '" << config.shm_camera << "' is not a camera of scene '" << scene.name << "'");
+    const auto& camera = scene.cameras[static_cast<std::size_t>(shm_camera)];
+    transport::ShmOptions shm{config.shm_name, config.shm_camera, config.shm_slots, 256};
+    shm.width = camera.width;
+    shm.height = camera.height;
+    shm.expiry_ms = config.shm_expiry_ms;
+    transports.push_back(transport::MakeShmTransport(shm));
+  }
 
   session::CommandQueue commands;
   session::LatestState latest_state;

@@ -142,7 +142,7 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
   *subscription_.mutable_channels() = subscribe.channels();
   subscription_.set_delivery(delivery);
   mailbox_.Reset(delivery);
-  context_.commands.Post({client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, link_}});
+  context_.commands.Post({client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, link_.lock()}});
   *reply.mutable_subscribed() = subscription_;
   return Outcome::kReply;
 }

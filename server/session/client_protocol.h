@@ -58,7 +58,9 @@ class ClientProtocol {
 
   ClientId client_;
   const ServerContext& context_;
-  std::shared_ptr<ClientLink> link_;
+  // Weak: the link (a transport session) owns this protocol object, and a
+  // strong pointer back would keep every closed session alive.
+  std::weak_ptr<ClientLink> link_;
   FrameMailbox& mailbox_;
   std::string client_name_;
   bool handshaken_ = false;

@@ -55,7 +55,8 @@ bool Scheduler::CameraWanted(uint32_t camera_index) const {
 
 void Scheduler::Deliver(const FrameRef& frame) const {
   for (const auto& s : subscriptions_) {
-    if (s.camera_index == frame->camera_index) s.link->OfferFrame(frame);
+    // A null link (a subscriber fed some other way, e.g. the shared-memory ring) only steps.
+    if (s.camera_index == frame->camera_index && s.link) s.link->OfferFrame(frame);
   }
 }
 

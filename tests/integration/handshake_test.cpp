@@ -12,7 +12,9 @@ using namespace std::chrono_literals;
 
 TEST_F(DaemonTest, ListeningLineAndWelcomeDescribeTheScene) {
   StartDaemon({"--width", "160", "--height", "96"});
-  EXPECT_EQ(daemon_->listening_line(), "sim4cvd listening tcp=" + std::to_string(daemon_->tcp_port()));
+  const std::string udp_port = ListeningField(daemon_->listening_line(), "udp");  // UDP is on by default
+  EXPECT_EQ(daemon_->listening_line(),
+            "sim4cvd listening tcp=" + std::to_string(daemon_->tcp_port()) + " udp=" + udp_port);
   auto client = Connect("welcome-test");
   const proto::Welcome& welcome = client->welcome();
   EXPECT_EQ(welcome.protocol_version(), 1u);
@@ -24,9 +26,11 @@ TEST_F(DaemonTest, ListeningLineAndWelcomeDescribeTheScene) {
   EXPECT_EQ(welcome.mode(), proto::SIM_MODE_LOCKSTEP);
   EXPECT_DOUBLE_EQ(welcome.physics_hz(), 240.0);
   EXPECT_DOUBLE_EQ(welcome.frame_hz(), 30.0);
-  ASSERT_EQ(welcome.transports_size(), 1);
+  ASSERT_EQ(welcome.transports_size(), 2);
   EXPECT_EQ(welcome.transports(0).kind(), proto::TRANSPORT_KIND_TCP);
   EXPECT_EQ(welcome.transports(0).address(), std::to_string(daemon_->tcp_port()));
+  EXPECT_EQ(welcome.transports(1).kind(), proto::TRANSPORT_KIND_UDP);
+  EXPECT_EQ(welcome.transports(1).address(), udp_port);
   ASSERT_EQ(welcome.entities_size(), 2);
   EXPECT_EQ(welcome.entities(0).name(), "car");
   EXPECT_EQ(welcome.entities(0).kind(), proto::ENTITY_KIND_CAR);

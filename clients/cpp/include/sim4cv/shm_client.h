@@ -1,0 +1,186 @@
+// sim4cv::ShmClient: frames from sim4cvd's shared-memory ring (--shm-name)
+// without a socket, and requests (Hello, Subscribe, Step, TrackerOutput,
+// Controls, GetState) through its reply ring. Layout and rules:
+// protocol/shm_layout.h and docs/protocol.md section 13. Depends on the
+// protocol only, never on server code.
+//
+//   sim4cv::ShmClient shm;
+//   shm.Open("/sim4cv");
+//   shm.Hello("tracker");
+//   shm.Subscribe(sim4cv::proto::DELIVERY_LOCKSTEP);
+//   uint64_t last = 0;
+//   for (...) {
+//     shm.Step();
+//     shm.WaitForFrame(last, std::chrono::milliseconds(1000));
+//     sim4cv::FrameView view;
+//     shm.AcquireNewest(view);           // zero-copy: pointers into the ring
+//     ... use view.image(CHANNEL_RGB), view.boxes() ...
+//     if (view.stale()) { /* the daemon overwrote it meanwhile: discard */ }
+//     last = view.frame_id();
+//     shm.SendTrackerOutput(last, x, y, w, h, confidence);
+//   }
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "protocol/shm_layout.h"
+#include "sim4cv.pb.h"
+#include "sim4cv/client.h"  // ImageView, ServerError, ConnectionError
+
+namespace sim4cv {
+
+// The object is missing or is not a sim4cv ring this client can read.
+class ShmError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+using ShmBox = shm::ShmBox;
+using ShmEntityPose = shm::ShmEntityPose;
+
+// A frame in place in the ring. The metadata (ids, sizes, boxes, poses) is
+// copied into the view when it is acquired and is consistent; the pixels stay
+// in shared memory and are valid until the daemon reuses the slot, which it
+// does without waiting (slot_count - 1 frames later). Check stale() after
+// using the pixels: if true, they may have changed while you read them.
+// A view holds nothing in shared memory: a reader that crashes blocks no one.
+class FrameView {
+ public:
+  bool valid() const { return slot_ != nullptr; }
+  uint64_t frame_id() const { return header_.frame_id; }
+  double sim_time() const { return header_.sim_time; }
+  int64_t render_end_mono_ns() const { return header_.render_end_mono_ns; }
+  uint32_t width() const { return header_.width; }
+  uint32_t height() const { return header_.height; }
+  // The ring publication this frame was written as (consecutive frames: +1).
+  uint64_t publication() const { return header_.publication; }
+  // RGB, DEPTH or MASK pixels in place; nullopt for other channels.
+  std::optional<ImageView> image(proto::Channel channel) const;
+  std::span<const ShmBox> boxes() const { return {header_.boxes, header_.box_count}; }
+  // Visible labelled objects; more than boxes().size() if the slot's box array was full.
+  uint32_t box_total() const { return header_.box_total; }
+  std::span<const ShmEntityPose> entities() const { return {header_.entities, header_.entity_count}; }
+
+  // True once the daemon has begun overwriting this view's slot.
+  bool stale() const;
+  // Throws ShmError if stale(): the pixels read since acquiring may be torn.
+  void Validate() const;
+  // Drops the pointers. Nothing in shared memory needs releasing.
+  void Release();
+
+ private:
+  friend class ShmClient;
+  const uint8_t* slot_ = nullptr;
+  uint64_t sequence_ = 0;
+  shm::ShmFrameHeader header_{};
+};
+
+// A frame copied out of the ring.
+struct OwnedFrame {
+  uint64_t frame_id = 0;
+  uint64_t publication = 0;
+  double sim_time = 0;
+  int64_t render_end_mono_ns = 0;
+  uint32_t width = 0, height = 0;
+  std::vector<uint8_t> rgb;    // height * width * 3
+  std::vector<float> depth;    // height * width
+  std::vector<uint16_t> mask;  // height * width
+  std::vector<ShmBox> boxes;
+  uint32_t box_total = 0;
+  std::vector<ShmEntityPose> entities;
+};
+
+class ShmClient {
+ public:
+  using Duration = std::chrono::milliseconds;
+
+  ShmClient();  // draws a random non-zero client token
+  ~ShmClient();
+  ShmClient(const ShmClient&) = delete;
+  ShmClient& operator=(const ShmClient&) = delete;
+
+  // Maps the object ("/name" or "name"). Throws ShmError if it does not
+  // exist, is not a sim4cv ring (magic), or has another layout version (the
+  // message names both).
+  void Open(const std::string& name);
+  void Close();
+  bool is_open() const { return base_ != nullptr; }
+  const shm::ShmHeader& header() const { return *reinterpret_cast<const shm::ShmHeader*>(base_); }
+  std::string camera() const;
+  uint64_t token() const { return token_; }
+
+  // Frames. Newest published frame id (0: none yet).
+  uint64_t newest_frame_id() const;
+  // True once the daemon has stopped: no more frames or responses.
+  bool closed() const;
+  // Zero-copy view of the newest frame; false if none was published yet.
+  bool AcquireNewest(FrameView& view) const;
+  // Copies the newest frame, retrying torn reads; false if none yet.
+  bool ReadNewest(OwnedFrame& frame) const;
+  // Waits (futex, after a short spin) until a frame newer than
+  // `after_frame_id` is published. False on timeout; throws ConnectionError
+  // if the daemon stopped.
+  bool WaitForFrame(uint64_t after_frame_id, Duration timeout) const;
+
+  // How long WaitForFrame and response waits poll before sleeping in
+  // FUTEX_WAIT. Default 0: the futex alone wakes within microseconds, and a
+  // spin only burns a core that the daemon may need (docs/protocol.md 13.4).
+  void set_spin(std::chrono::microseconds spin) { spin_ = spin; }
+
+  // Requests through the reply ring; replies come back through this client's
+  // response entry. Hello and Subscribe wait for their answer and throw
+  // ServerError if the daemon refuses; Step, SendTrackerOutput and
+  // SendControls do not wait (a refusal arrives later, see ReceiveReply).
+  proto::Welcome Hello(const std::string& client_name = "cpp-shm-client", Duration timeout = Duration(5000),
+                       uint32_t protocol_version = 0 /* 0: this build's */);
+  // Subscribes to the ring's camera (frames stay in the ring).
+  void Subscribe(proto::Delivery delivery, Duration timeout = Duration(5000));
+  void Step();
+  void SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence);
+  void SendControls(uint32_t entity_id, float steering, float throttle, float brake);
+  proto::State GetState(Duration timeout = Duration(5000));
+
+  // Low level: one Envelope into the reply ring (at most
+  // shm::kShmReplyDataBytes encoded; ShmError if larger).
+  void SendEnvelope(const proto::Envelope& envelope);
+  // Low level: raw bytes as one message (tests use it to send garbage).
+  void SendRaw(const void* data, std::size_t size);
+  // Low level: the next response of any kind (queued ones first); false on
+  // timeout. Errors are returned, not thrown.
+  bool ReceiveReply(proto::Envelope& reply, Duration timeout);
+  // Responses the daemon wrote that were overwritten before this client read them.
+  uint64_t responses_lost() const { return responses_lost_; }
+
+ private:
+  using Deadline = std::chrono::steady_clock::time_point;
+  bool CopyNewest(OwnedFrame& frame) const;
+  void RequireOpen() const;  // throws ShmError
+  bool TryReadResponse(proto::Envelope& reply);
+  bool NextResponse(proto::Envelope& reply, Deadline deadline);  // from shared memory, not pending_
+  bool ReceiveKind(proto::Envelope::KindCase kind, proto::Envelope& out, Deadline deadline);
+  void WaitForResponse(uint32_t seen, Deadline deadline);
+  int FindEntry();
+
+  uint8_t* base_ = nullptr;
+  std::size_t mapped_bytes_ = 0;
+  std::string name_;
+  uint64_t token_ = 0;
+  // Response entry: index, assignment generation, next response to read.
+  int entry_ = -1;
+  bool had_entry_ = false;  // an entry disappearing means the daemon expired us
+  uint32_t generation_ = 0;
+  uint64_t next_response_ = 0;
+  uint64_t responses_lost_ = 0;
+  std::chrono::microseconds spin_{0};
+  std::deque<proto::Envelope> pending_;
+  std::string scratch_;
+};
+
+}  // namespace sim4cv

@@ -1,0 +1,233 @@
+/* The byte layout of sim4cvd's POSIX shared-memory object (--shm-name): one
+ * header, a ring of frame slots (one writer, lock-free readers, a seqlock per
+ * slot), a reply ring from clients to the daemon and a per-client response
+ * area. docs/protocol.md section 13 documents every byte and the protocols;
+ * this header is the one definition the daemon and the C++ client share, and
+ * it is plain C11 as well as C++ so other languages can be checked against it.
+ *
+ * All integers and floats are little-endian (the object never leaves the
+ * host); every struct has explicit padding and fixed offsets, asserted below.
+ * Fields written while others read are accessed atomically (C11 atomics /
+ * std::atomic_ref); the rest are written once at creation. */
+#ifndef SIM4CV_PROTOCOL_SHM_LAYOUT_H_
+#define SIM4CV_PROTOCOL_SHM_LAYOUT_H_
+
+#ifdef __cplusplus
+#include <cstddef>
+#include <cstdint>
+#define SIM4CV_SHM_STATIC_ASSERT(condition, message) static_assert(condition, message)
+#define SIM4CV_SHM_CONSTANT(name, value) inline constexpr uint32_t name = value;
+namespace sim4cv::shm {
+#else
+#include <stddef.h>
+#include <stdint.h>
+#define SIM4CV_SHM_STATIC_ASSERT(condition, message) _Static_assert(condition, message)
+#define SIM4CV_SHM_CONSTANT(name, value) enum { name = value };
+#endif
+
+/* ShmHeader.magic: these 8 ASCII bytes, no terminating NUL. */
+#define SIM4CV_SHM_MAGIC "SIM4CVSM"
+
+/* Bumped whenever any offset, size or protocol rule below changes. */
+SIM4CV_SHM_CONSTANT(kShmLayoutVersion, 1)
+SIM4CV_SHM_CONSTANT(kShmHeaderBytes, 512)
+/* Frame slot: this many bytes of ShmFrameHeader region, then the pixels. */
+SIM4CV_SHM_CONSTANT(kShmFrameHeaderBytes, 8192)
+SIM4CV_SHM_CONSTANT(kShmMaxChannels, 4)
+SIM4CV_SHM_CONSTANT(kShmMaxBoxes, 128)
+SIM4CV_SHM_CONSTANT(kShmMaxEntities, 8)
+/* Reply ring (client -> daemon): fixed-size slots, one Envelope each. */
+SIM4CV_SHM_CONSTANT(kShmReplySlotBytes, 256)
+SIM4CV_SHM_CONSTANT(kShmReplyDataBytes, 232)
+/* Response area (daemon -> one client): entries of kShmResponseDepth messages. */
+SIM4CV_SHM_CONSTANT(kShmResponseEntryHeaderBytes, 64)
+SIM4CV_SHM_CONSTANT(kShmResponseMessageBytes, 2048)
+SIM4CV_SHM_CONSTANT(kShmResponseDataBytes, 1984)
+SIM4CV_SHM_CONSTANT(kShmResponseDepth, 8)
+/* Every slot, entry and pixel plane starts on a multiple of this. */
+SIM4CV_SHM_CONSTANT(kShmAlignment, 64)
+
+/* The object starts with this header (512 bytes). Lines of 64 bytes group
+ * fields by writer so that readers polling one line do not share it with
+ * another writer. */
+typedef struct ShmHeader {
+  /* Line 0: written once at creation. */
+  char magic[8];               /*   0: SIM4CV_SHM_MAGIC */
+  uint32_t layout_version;     /*   8: kShmLayoutVersion */
+  uint32_t header_bytes;       /*  12: kShmHeaderBytes */
+  uint64_t total_bytes;        /*  16: size of the whole object */
+  uint32_t slot_count;         /*  24: frame slots in the ring (>= 2) */
+  uint32_t frame_header_bytes; /*  28: kShmFrameHeaderBytes */
+  uint64_t slot_bytes;         /*  32: bytes per frame slot (multiple of 4096) */
+  uint64_t slots_offset;       /*  40: offset of frame slot 0 */
+  uint32_t camera_width;       /*  48: pixels */
+  uint32_t camera_height;      /*  52: pixels */
+  uint32_t writer_pid;         /*  56: the daemon's process id */
+  uint32_t max_boxes;          /*  60: kShmMaxBoxes */
+  /* Line 1: written once at creation. */
+  char camera_name[32];        /*  64: NUL-terminated, the camera of the frames */
+  uint64_t reply_offset;       /*  96: offset of reply slot 0 */
+  uint32_t reply_capacity;     /* 104: reply slots */
+  uint32_t reply_slot_bytes;   /* 108: kShmReplySlotBytes */
+  uint64_t response_offset;    /* 112: offset of response entry 0 */
+  uint32_t response_entries;   /* 120: entries (most shm clients at once) */
+  uint32_t response_depth;     /* 124: kShmResponseDepth */
+  /* Line 2: written once at creation. */
+  uint32_t response_message_bytes; /* 128: kShmResponseMessageBytes */
+  uint32_t max_entities;       /* 132: kShmMaxEntities */
+  uint32_t expiry_ms;          /* 136: a client silent this long is disconnected */
+  uint32_t protocol_version;   /* 140: the Envelope protocol version (Hello) */
+  uint64_t response_entry_bytes; /* 144: bytes per response entry */
+  uint8_t reserved2[40];       /* 152 */
+  /* Line 3: the frame writer (the daemon's sim thread). */
+  uint64_t published;          /* 192: frames published; the newest is in slot (published-1) % slot_count */
+  uint64_t newest_frame_id;    /* 200: frame_id of that frame (0: none yet) */
+  uint32_t frame_futex;        /* 208: +1 per published frame; readers FUTEX_WAIT on it */
+  uint32_t frame_waiters;      /* 212: readers inside FUTEX_WAIT (the writer skips FUTEX_WAKE at 0) */
+  uint32_t closed;             /* 216: 1 once the daemon stopped: no more frames or responses */
+  uint8_t reserved3[36];       /* 220 */
+  /* Line 4: reply ring producers (clients). */
+  uint64_t reply_write;        /* 256: tickets taken; fetch_add 1 reserves a reply slot */
+  uint32_t reply_futex;        /* 264: +1 per completed reply; the daemon FUTEX_WAITs on it */
+  uint32_t reply_sleeping;     /* 268: 1 while the daemon is (about to be) in FUTEX_WAIT */
+  uint8_t reserved4[48];       /* 272 */
+  /* Line 5: reply ring consumer (the daemon). */
+  uint64_t reply_read;         /* 320: next ticket the daemon reads */
+  uint64_t replies_dropped;    /* 328: replies overwritten before the daemon read them */
+  uint8_t reserved5[48];       /* 336 */
+  /* Line 6: response area (the daemon). */
+  uint32_t response_futex;     /* 384: +1 per response written or entry freed */
+  uint32_t response_waiters;   /* 388: clients inside FUTEX_WAIT on response_futex */
+  uint8_t reserved6[56];       /* 392 */
+  /* Line 7. */
+  uint8_t reserved7[64];       /* 448 */
+} ShmHeader;
+
+/* One pixel channel of a frame slot. */
+typedef struct ShmChannel {
+  uint32_t channel;         /*  0: proto Channel: 1 RGB, 2 DEPTH, 3 MASK */
+  uint32_t format;          /*  4: proto PixelFormat: 1 RGB8, 2 DEPTH_F32, 3 INSTANCE_U16 */
+  uint32_t stride;          /*  8: bytes per row */
+  uint32_t bytes_per_pixel; /* 12: 3, 4, 2 */
+  uint64_t offset;          /* 16: from the start of the slot; a multiple of 64 */
+  uint64_t bytes;           /* 24: height * stride */
+} ShmChannel;
+
+/* A ground-truth box; the fields of proto Box. */
+typedef struct ShmBox {
+  uint32_t object_id;      /*  0 */
+  uint32_t object_class;   /*  4: proto ObjectClass */
+  uint32_t x;              /*  8 */
+  uint32_t y;              /* 12 */
+  uint32_t width;          /* 16 */
+  uint32_t height;         /* 20 */
+  float visibility;        /* 24 */
+  uint32_t visible_pixels; /* 28 */
+} ShmBox;
+
+/* An entity's pose and velocity; the fields of proto EntityState but name. */
+typedef struct ShmEntityPose {
+  uint32_t id;                 /*   0 */
+  uint32_t kind;               /*   4: proto EntityKind */
+  double position[3];          /*   8: x, y, z, metres */
+  double orientation[4];       /*  32: w, x, y, z */
+  double linear_velocity[3];   /*  64: m/s */
+  double angular_velocity[3];  /*  88: rad/s */
+} ShmEntityPose;
+
+/* The first 8192 bytes of each frame slot; the pixels follow. */
+typedef struct ShmFrameHeader {
+  uint64_t sequence;           /*    0: seqlock: odd while the writer changes the slot */
+  uint64_t publication;        /*    8: ShmHeader.published value this slot was written as */
+  uint64_t frame_id;           /*   16 */
+  double sim_time;             /*   24: seconds */
+  int64_t render_end_mono_ns;  /*   32: CLOCK_MONOTONIC */
+  uint32_t width;              /*   40 */
+  uint32_t height;             /*   44 */
+  uint32_t channel_mask;       /*   48: bit (1 << channel) per channel present (0x0e) */
+  uint32_t channel_count;      /*   52: entries used in channels[] (3) */
+  uint32_t box_count;          /*   56: entries used in boxes[] */
+  uint32_t box_total;          /*   60: visible labelled objects (> box_count if truncated) */
+  uint32_t entity_count;       /*   64: entries used in entities[] */
+  uint32_t camera_index;       /*   68: index of the camera in Welcome.cameras */
+  uint8_t reserved0[56];       /*   72 */
+  ShmChannel channels[4];      /*  128: RGB, DEPTH, MASK (in this order), one unused */
+  ShmBox boxes[128];           /*  256: ordered by object_id */
+  ShmEntityPose entities[8];   /* 4352: ordered by id */
+  uint8_t reserved1[2944];     /* 5248 */
+} ShmFrameHeader;
+
+/* One client -> daemon message (256 bytes). state encodes the ticket n it
+ * holds: 0 never used, 2n+1 being written, 2n+2 complete. */
+typedef struct ShmReplySlot {
+  uint64_t state;      /*  0 */
+  uint64_t token;      /*  8: the sender's client token (non-zero) */
+  uint32_t size;       /* 16: bytes of data used (<= kShmReplyDataBytes) */
+  uint32_t checksum;   /* 20: FNV-1a 32 over token (8 bytes LE), size (4 bytes LE), data[0..size) */
+  uint8_t data[232];   /* 24: one serialized Envelope */
+} ShmReplySlot;
+
+/* Start of a response entry; kShmResponseDepth ShmResponseMessages follow. */
+typedef struct ShmResponseEntry {
+  uint64_t token;       /*  0: owning client's token; 0 while free */
+  uint64_t written;     /*  8: responses written since the entry was assigned */
+  uint32_t generation;  /* 16: +1 each time the entry is assigned */
+  uint8_t reserved[44]; /* 20 */
+} ShmResponseEntry;
+
+/* One daemon -> client response (2048 bytes). */
+typedef struct ShmResponseMessage {
+  uint64_t sequence;     /*  0: seqlock: odd while written */
+  uint64_t index;        /*  8: which response of the entry (0, 1, ...) */
+  uint32_t size;         /* 16: bytes of data used */
+  uint8_t reserved[44];  /* 20 */
+  uint8_t data[1984];    /* 64: one serialized Envelope */
+} ShmResponseMessage;
+
+SIM4CV_SHM_STATIC_ASSERT(sizeof(double) == 8 && sizeof(float) == 4, "IEEE-754 binary64/binary32 expected");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmHeader) == 512, "ShmHeader is 512 bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, camera_name) == 64, "ShmHeader line 1");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_message_bytes) == 128, "ShmHeader line 2");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_entry_bytes) == 144, "ShmHeader.response_entry_bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, published) == 192, "ShmHeader line 3");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, frame_futex) == 208, "ShmHeader.frame_futex");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, closed) == 216, "ShmHeader.closed");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reply_write) == 256, "ShmHeader line 4");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reply_futex) == 264, "ShmHeader.reply_futex");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reply_read) == 320, "ShmHeader line 5");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_futex) == 384, "ShmHeader line 6");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reserved7) == 448, "ShmHeader line 7");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmChannel) == 32, "ShmChannel is 32 bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmChannel, offset) == 16, "ShmChannel.offset");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmBox) == 32, "ShmBox is 32 bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmBox, visibility) == 24, "ShmBox.visibility");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmEntityPose) == 112, "ShmEntityPose is 112 bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmEntityPose, position) == 8, "ShmEntityPose.position");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmEntityPose, orientation) == 32, "ShmEntityPose.orientation");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmEntityPose, linear_velocity) == 64, "ShmEntityPose.linear_velocity");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmEntityPose, angular_velocity) == 88, "ShmEntityPose.angular_velocity");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmFrameHeader) == 8192, "ShmFrameHeader is kShmFrameHeaderBytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, sim_time) == 24, "ShmFrameHeader.sim_time");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, width) == 40, "ShmFrameHeader.width");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, camera_index) == 68, "ShmFrameHeader.camera_index");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, channels) == 128, "ShmFrameHeader.channels");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, boxes) == 256, "ShmFrameHeader.boxes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, entities) == 4352, "ShmFrameHeader.entities");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, reserved1) == 5248, "ShmFrameHeader.reserved1");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmReplySlot) == 256, "ShmReplySlot is kShmReplySlotBytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmReplySlot, data) == 24, "ShmReplySlot.data");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmResponseEntry) == 64, "ShmResponseEntry is kShmResponseEntryHeaderBytes");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmResponseMessage) == 2048, "ShmResponseMessage is kShmResponseMessageBytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmResponseMessage, data) == 64, "ShmResponseMessage.data");
+
+#ifdef __cplusplus
+static_assert(kShmMaxChannels == 4 && kShmMaxBoxes == 128 && kShmMaxEntities == 8, "array sizes above");
+static_assert(kShmReplyDataBytes == sizeof(ShmReplySlot::data), "reply data size");
+static_assert(kShmResponseDataBytes == sizeof(ShmResponseMessage::data), "response data size");
+}  // namespace sim4cv::shm
+#endif
+
+#undef SIM4CV_SHM_CONSTANT
+#undef SIM4CV_SHM_STATIC_ASSERT
+
+#endif /* SIM4CV_PROTOCOL_SHM_LAYOUT_H_ */

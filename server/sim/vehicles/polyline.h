@@ -1,0 +1,43 @@
+// A 2D polyline parameterised by arc length, open or closed: the path the
+// car's driver follows. (Like server/sim/ClosedPath, which it may replace,
+// but also open; the vehicles library cannot depend on sim4cv_sim, which is
+// what will link it.)
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace sim4cv::vehicles {
+
+class Polyline {
+ public:
+  // At least 2 points (3 if closed), consecutive points distinct. A closed
+  // polyline joins its last point to its first: do not repeat the first point.
+  Polyline(std::vector<Eigen::Vector2d> points, bool closed);
+
+  struct Projection {
+    double arc_length = 0.0;  // from the first point
+    Eigen::Vector2d point = Eigen::Vector2d::Zero();
+    double distance = 0.0;  // from the projected point to the path
+  };
+  // Nearest point on the path (every segment is searched).
+  Projection Project(const Eigen::Vector2d& p) const;
+
+  // The point at arc length `s`. Closed: wraps around. Open: continues
+  // straight beyond either end, so a lookahead past the end stays defined.
+  Eigen::Vector2d PointAt(double s) const;
+
+  double length() const { return cumulative_.back(); }
+  bool closed() const { return closed_; }
+  const std::vector<Eigen::Vector2d>& points() const { return points_; }
+
+ private:
+  std::size_t SegmentCount() const { return closed_ ? points_.size() : points_.size() - 1; }
+  const Eigen::Vector2d& SegmentEnd(std::size_t i) const { return points_[(i + 1) % points_.size()]; }
+
+  std::vector<Eigen::Vector2d> points_;
+  bool closed_;
+  std::vector<double> cumulative_;  // arc length at the start of each segment; back() = total length
+};
+
+}  // namespace sim4cv::vehicles

@@ -1,0 +1,62 @@
+// A quadcopter as one Bullet rigid body (a box) that is moved only by a
+// thrust force along its body z axis and body torques: gravity, mass,
+// inertia and damping do the rest. A QuadcopterController computes both
+// every physics substep. Parameters: docs/vehicles.md.
+#pragma once
+
+#include <btBulletDynamicsCommon.h>
+
+#include <Eigen/Core>
+
+#include "server/sim/vehicles/bullet_body.h"
+#include "server/sim/vehicles/quadcopter_controller.h"
+#include "server/sim/vehicles/vehicle_state.h"
+
+namespace sim4cv::vehicles {
+
+struct QuadcopterParams {
+  double mass = 1.5;                             // kg
+  Eigen::Vector3d half_extents{0.3, 0.3, 0.05};  // m (0.6 m span, 0.1 m tall box)
+  double linear_damping = 0.1;                   // Bullet's: velocity *= (1 - d)^dt, i.e. drag ~0.105/s
+  double angular_damping = 0.2;                  // Bullet's, on the angular velocity
+  double max_thrust = 2.5 * 1.5 * 9.81;          // N (thrust-to-weight 2.5)
+  Eigen::Vector3d max_torque{2.0, 2.0, 0.5};     // N m about body x, y, z
+};
+
+class Quadcopter {
+ public:
+  // Spawns the UAV level at `position`, heading `yaw`, at rest, holding that
+  // position's altitude with zero velocity command.
+  Quadcopter(btDiscreteDynamicsWorld& world, const QuadcopterParams& params, const Eigen::Vector3d& position,
+             double yaw, const QuadcopterGains& gains = {});
+  Quadcopter(const Quadcopter&) = delete;
+  Quadcopter& operator=(const Quadcopter&) = delete;
+
+  void SetCommand(const QuadcopterCommand& command) { command_ = command; }
+  const QuadcopterCommand& command() const { return command_; }
+
+  // Runs the controller on the current state and applies its thrust and
+  // torque for the next physics step. Call once before every
+  // world.stepSimulation(dt, 0).
+  void Update(double dt);
+
+  VehicleState State() const { return body_.StateAt(Eigen::Vector3d::Zero()); }
+  const QuadcopterActuation& last_actuation() const { return actuation_; }
+  const QuadcopterParams& params() const { return params_; }
+  btRigidBody& body() { return body_.body(); }
+
+  // Places the UAV as the constructor does (spawning and resets only).
+  void Reset(const Eigen::Vector3d& position, double yaw);
+
+ private:
+  static btTransform SpawnPose(const Eigen::Vector3d& position, double yaw);
+
+  QuadcopterParams params_;
+  btBoxShape box_;
+  BodyInWorld body_;
+  QuadcopterController controller_;
+  QuadcopterCommand command_;
+  QuadcopterActuation actuation_;
+};
+
+}  // namespace sim4cv::vehicles

@@ -1,0 +1,114 @@
+#include "server/transport/shm/shm_ring_writer.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace sim4cv::transport {
+namespace {
+
+void SetChannel(shm::ShmChannel& out, proto::Channel channel, proto::PixelFormat format, uint32_t bytes_per_pixel,
+                uint32_t width, uint32_t height, uint64_t offset) {
+  out.channel = channel;
+  out.format = format;
+  out.bytes_per_pixel = bytes_per_pixel;
+  out.stride = width * bytes_per_pixel;
+  out.offset = offset;
+  out.bytes = static_cast<uint64_t>(out.stride) * height;
+}
+
+void CopyVec3(const proto::Vec3& v, double* out) {
+  out[0] = v.x();
+  out[1] = v.y();
+  out[2] = v.z();
+}
+
+void FillEntities(const proto::State& state, shm::ShmFrameHeader& h) {
+  const int count = std::min(state.entities_size(), static_cast<int>(shm::kShmMaxEntities));
+  for (int i = 0; i < count; ++i) {
+    const proto::EntityState& e = state.entities(i);
+    shm::ShmEntityPose& pose = h.entities[i];
+    pose.id = e.id();
+    pose.kind = static_cast<uint32_t>(e.kind());
+    CopyVec3(e.position(), pose.position);
+    pose.orientation[0] = e.orientation().w();
+    pose.orientation[1] = e.orientation().x();
+    pose.orientation[2] = e.orientation().y();
+    pose.orientation[3] = e.orientation().z();
+    CopyVec3(e.linear_velocity(), pose.linear_velocity);
+    CopyVec3(e.angular_velocity(), pose.angular_velocity);
+  }
+  h.entity_count = static_cast<uint32_t>(count);
+}
+
+}  // namespace
+
+ShmRingWriter::ShmRingWriter(std::shared_ptr<ShmRegion> region, uint32_t camera_index)
+    : region_(std::move(region)), camera_index_(camera_index) {}
+
+void ShmRingWriter::OfferFrame(const session::FrameRef& frame) { Write(*frame); }
+
+void ShmRingWriter::Write(const session::Frame& frame) {
+  const ShmRegion& region = *region_;
+  const ShmRegionParams& params = region.params();
+  const std::size_t pixels = static_cast<std::size_t>(params.width) * params.height;
+  if (frame.camera_index != camera_index_ || frame.width != params.width || frame.height != params.height ||
+      frame.rgb.size() < pixels * 3 || frame.depth.size() < pixels || frame.mask.size() < pixels) {
+    return;
+  }
+  const shm::Mapped& map = region.map();
+  shm::ShmHeader& header = map.header();
+  const uint64_t publication = published_ + 1;
+  const uint64_t slot_index = (publication - 1) % params.slot_count;
+  uint8_t* slot = map.slot_bytes(slot_index);
+  shm::ShmFrameHeader& h = map.slot(slot_index);
+
+  // Seqlock: odd while the slot changes, so readers discard what they copy meanwhile.
+  auto sequence = shm::Atomic(h.sequence);
+  const uint64_t before = sequence.load(std::memory_order_relaxed);
+  sequence.store(before + 1, std::memory_order_relaxed);
+  std::atomic_thread_fence(std::memory_order_release);
+
+  h.publication = publication;
+  h.frame_id = frame.frame_id;
+  h.sim_time = frame.sim_time;
+  h.render_end_mono_ns = frame.render_end_mono_ns;
+  h.width = frame.width;
+  h.height = frame.height;
+  h.camera_index = frame.camera_index;
+  const shm::Geometry& g = region.geometry();
+  SetChannel(h.channels[0], proto::CHANNEL_RGB, proto::PIXEL_FORMAT_RGB8, 3, frame.width, frame.height, g.rgb_offset);
+  SetChannel(h.channels[1], proto::CHANNEL_DEPTH, proto::PIXEL_FORMAT_DEPTH_F32, 4, frame.width, frame.height,
+             g.depth_offset);
+  SetChannel(h.channels[2], proto::CHANNEL_MASK, proto::PIXEL_FORMAT_INSTANCE_U16, 2, frame.width, frame.height,
+             g.mask_offset);
+  h.channel_count = 3;
+  h.channel_mask = (1u << proto::CHANNEL_RGB) | (1u << proto::CHANNEL_DEPTH) | (1u << proto::CHANNEL_MASK);
+  std::memcpy(slot + g.rgb_offset, frame.rgb.data(), h.channels[0].bytes);
+  std::memcpy(slot + g.depth_offset, frame.depth.data(), h.channels[1].bytes);
+  std::memcpy(slot + g.mask_offset, frame.mask.data(), h.channels[2].bytes);
+
+  const std::size_t boxes = std::min<std::size_t>(frame.boxes.size(), shm::kShmMaxBoxes);
+  for (std::size_t i = 0; i < boxes; ++i) {
+    const render::GroundTruthBox& in = frame.boxes[i];
+    h.boxes[i] = {in.instance, in.object_class, in.x, in.y, in.width, in.height, in.visibility, in.visible_pixels};
+  }
+  h.box_count = static_cast<uint32_t>(boxes);
+  h.box_total = static_cast<uint32_t>(frame.boxes.size());
+  FillEntities(frame.state, h);
+
+  sequence.store(before + 2, std::memory_order_release);
+  published_ = publication;
+  // published first: a reader that sees newest_frame_id finds that frame (or a newer one) published.
+  shm::Atomic(header.published).store(publication, std::memory_order_release);
+  shm::Atomic(header.newest_frame_id).store(frame.frame_id, std::memory_order_release);
+  shm::BumpAndWake(header.frame_futex, header.frame_waiters);
+}
+
+void ShmRingWriter::Close() {
+  shm::ShmHeader& header = region_->header();
+  shm::Atomic(header.closed).store(1, std::memory_order_release);
+  shm::Atomic(header.frame_futex).fetch_add(1, std::memory_order_seq_cst);
+  shm::FutexWake(header.frame_futex, 0x7fffffff);
+}
+
+}  // namespace sim4cv::transport

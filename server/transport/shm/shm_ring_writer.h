@@ -1,0 +1,32 @@
+// The frame ring's single writer: a ClientLink subscribed (newest-frame) to
+// the ring's camera, so the sim thread hands it every frame it renders. Each
+// frame is copied once into the next slot under that slot's seqlock; the
+// writer never waits for readers and overwrites the oldest slot.
+#pragma once
+
+#include <memory>
+
+#include "server/session/client_link.h"
+#include "server/transport/shm/shm_region.h"
+
+namespace sim4cv::transport {
+
+class ShmRingWriter : public session::ClientLink {
+ public:
+  ShmRingWriter(std::shared_ptr<ShmRegion> region, uint32_t camera_index);
+
+  // Sim thread. Frames of other cameras are ignored. Never blocks, never allocates.
+  void OfferFrame(const session::FrameRef& frame) override;
+  // The same for a Frame not from a pool (tests).
+  void Write(const session::Frame& frame);
+
+  // Marks the ring closed and wakes every waiting reader (after the last frame).
+  void Close();
+
+ private:
+  std::shared_ptr<ShmRegion> region_;  // keeps the mapping while the scheduler holds this link
+  uint32_t camera_index_;
+  uint64_t published_ = 0;
+};
+
+}  // namespace sim4cv::transport

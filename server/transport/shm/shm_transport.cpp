@@ -1,0 +1,224 @@
+// The shared-memory Transport: the frame ring's writer (called by the sim
+// thread) plus one "shm" thread that drains the reply ring, runs each client
+// token's messages through its own ClientProtocol exactly as TCP does, writes
+// the replies into the client's response entry, and disconnects clients that
+// have been silent for --shm-expiry-ms.
+#include "server/transport/shm/shm_transport.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <thread>
+
+#include "server/common/log.h"
+#include "server/session/client_protocol.h"
+#include "server/transport/shm/shm_reply_reader.h"
+#include "server/transport/shm/shm_responder.h"
+#include "server/transport/shm/shm_ring_writer.h"
+
+namespace sim4cv::transport {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Outcome = session::ClientProtocol::Outcome;
+
+// A shm client's subscription gets its frames through the ring, so its link
+// only counts them: each is one "frame sent" for the lockstep Step limit.
+class CountingLink : public session::ClientLink {
+ public:
+  void OfferFrame(const session::FrameRef&) override { offered_.fetch_add(1, std::memory_order_relaxed); }
+  uint64_t Take() { return offered_.exchange(0, std::memory_order_relaxed); }
+
+ private:
+  std::atomic<uint64_t> offered_{0};
+};
+
+struct ShmSession {
+  int entry = -1;  // response-area entry
+  Clock::time_point last_heard;
+  // One "connection": replaced after a fatal Error, like a TCP reconnect.
+  session::ClientId id = 0;
+  std::shared_ptr<CountingLink> link;
+  session::FrameMailbox mailbox;  // unused: ClientProtocol needs one
+  std::unique_ptr<session::ClientProtocol> protocol;
+  bool welcomed = false;
+};
+
+ShmRegionParams RegionParams(const ShmOptions& o) {
+  return {o.name, o.camera, o.width, o.height, o.slot_count, o.reply_slot_count, o.max_clients, o.expiry_ms};
+}
+
+class ShmTransport : public Transport {
+ public:
+  explicit ShmTransport(const ShmOptions& options)
+      : options_(options), region_(std::make_shared<ShmRegion>(RegionParams(options))), responder_(region_) {}
+
+  ~ShmTransport() override { Stop(); }
+
+  proto::TransportInfo info() const override {
+    proto::TransportInfo info;
+    info.set_kind(proto::TRANSPORT_KIND_SHM);
+    info.set_address(options_.name);
+    return info;
+  }
+
+  std::string listening_field() const override { return "shm=" + options_.name; }
+
+  void Start(const session::ServerContext& context) override {
+    const int camera = context.scene.FindCamera(options_.camera);
+    if (camera < 0) throw std::invalid_argument("--shm-camera '" + options_.camera + "' is not a camera of the scene");
+    const auto& spec = context.scene.cameras[static_cast<std::size_t>(camera)];
+    if (spec.width != options_.width || spec.height != options_.height) {
+      throw std::invalid_argument("shared-memory ring sized for " + std::to_string(options_.width) + "x" +
+                                  std::to_string(options_.height) + " but camera '" + options_.camera + "' is " +
+                                  std::to_string(spec.width) + "x" + std::to_string(spec.height));
+    }
+    context_ = &context;
+    writer_ = std::make_shared<ShmRingWriter>(region_, static_cast<uint32_t>(camera));
+    // The ring's own newest-frame subscription: the camera renders every frame.
+    writer_id_ = session::NewClientId();
+    context.commands.Post(
+        {writer_id_, session::SubscribeCommand{static_cast<uint32_t>(camera), proto::DELIVERY_NEWEST, writer_}});
+    reader_ =
+        std::make_unique<ShmReplyReader>(region_, context.counters, std::chrono::microseconds(options_.reply_spin_us));
+    thread_ = std::thread([this] { Run(); });
+  }
+
+  void Stop() override {
+    if (stopped_) return;
+    stopped_ = true;
+    if (thread_.joinable()) {
+      stopping_ = true;
+      reader_->Wake();
+      thread_.join();
+    }
+    for (auto& [token, s] : sessions_) {
+      if (s->protocol) s->protocol->Disconnect();
+    }
+    sessions_.clear();
+    if (context_) context_->commands.Post({writer_id_, session::DisconnectCommand{}});
+    if (writer_) writer_->Close();
+    responder_.WakeAll();
+    region_->Unlink();
+  }
+
+ private:
+  void Run() {
+    const auto idle_wait =
+        std::chrono::milliseconds(std::min<uint32_t>(100, std::max<uint32_t>(1, options_.expiry_ms / 4)));
+    while (!stopping_) {
+      const uint32_t seen = reader_->futex_value();
+      const Clock::time_point now = Clock::now();
+      ShmReplyReader::Message message;
+      ShmReplyReader::Result result;
+      while ((result = reader_->Next(message, now)) == ShmReplyReader::Result::kMessage) Handle(message, now);
+      ExpireSilent(now);
+      if (stopping_) break;
+      reader_->Wait(seen, result == ShmReplyReader::Result::kStalled ? std::chrono::milliseconds(1) : idle_wait);
+    }
+  }
+
+  void Handle(const ShmReplyReader::Message& message, Clock::time_point now) {
+    auto it = sessions_.find(message.token);
+    if (it == sessions_.end()) {
+      const int entry = responder_.Assign(message.token);
+      if (entry < 0) {
+        context_->counters.Add("shm.refused");
+        LOG_INFO("shared-memory message from a new client refused: all " << options_.max_clients
+                                                                         << " response entries are in use");
+        return;
+      }
+      it = sessions_.emplace(message.token, std::make_unique<ShmSession>()).first;
+      it->second->entry = entry;
+    }
+    ShmSession& s = *it->second;
+    s.last_heard = now;
+    if (!s.protocol) {
+      s.id = session::NewClientId();
+      s.link = std::make_shared<CountingLink>();
+      s.protocol = std::make_unique<session::ClientProtocol>(s.id, *context_, s.link, s.mailbox);
+      s.welcomed = false;
+      LOG_INFO("client " << s.id << " connected over shared memory " << options_.name);
+    }
+    // Frames the ring received for this client since its last message; more
+    // than the Step limit cannot matter.
+    const uint64_t delivered = std::min<uint64_t>(s.link->Take(), session::FrameMailbox::kMaxLockstepBacklog);
+    for (uint64_t n = 0; n < delivered; ++n) s.protocol->OnFrameSent();
+
+    Outcome outcome;
+    if (!request_.ParseFromArray(message.data, static_cast<int>(message.size))) {
+      outcome = session::ClientProtocol::Refuse(
+          proto::ERROR_CODE_MALFORMED_MESSAGE,
+          "the " + std::to_string(message.size) + " bytes of a shared-memory reply slot are not a valid Envelope", true,
+          reply_);
+    } else if (s.welcomed && request_.has_subscribe() && request_.subscribe().camera() != options_.camera &&
+               context_->scene.FindCamera(request_.subscribe().camera()) >= 0) {
+      outcome = session::ClientProtocol::Refuse(
+          proto::ERROR_CODE_INVALID_ARGUMENT,
+          "Subscribe.camera is '" + request_.subscribe().camera() + "' but the shared-memory ring " + options_.name +
+              " carries camera '" + options_.camera + "' (daemon flag --shm-camera); subscribe to '" + options_.camera +
+              "' here, or use TCP for other cameras",
+          false, reply_);
+    } else {
+      outcome = s.protocol->Handle(request_, reply_);
+      if (reply_.has_welcome()) s.welcomed = true;
+    }
+    if (outcome == Outcome::kNoReply) return;
+    if (!responder_.Write(s.entry, reply_)) {
+      context_->counters.Add("shm.responses_too_large");
+      const std::size_t size = reply_.ByteSizeLong();
+      session::ClientProtocol::Refuse(proto::ERROR_CODE_INVALID_STATE,
+                                      "the reply is " + std::to_string(size) + " bytes, more than the " +
+                                          std::to_string(shm::kShmResponseDataBytes) +
+                                          " a shared-memory response holds; ask for it over TCP",
+                                      false, reply_);
+      responder_.Write(s.entry, reply_);
+    }
+    if (outcome == Outcome::kReplyAndClose) {
+      LOG_INFO("client " << s.id << " refused: " << reply_.error().message());
+      s.protocol->Disconnect();
+      s.protocol.reset();  // its next message starts a new session, which must begin with Hello
+    }
+  }
+
+  void ExpireSilent(Clock::time_point now) {
+    const auto limit = std::chrono::milliseconds(options_.expiry_ms);
+    for (auto it = sessions_.begin(); it != sessions_.end();) {
+      ShmSession& s = *it->second;
+      if (now - s.last_heard <= limit) {
+        ++it;
+        continue;
+      }
+      if (s.protocol) {
+        LOG_INFO("client " << s.id << " sent nothing over shared memory for " << options_.expiry_ms
+                           << " ms (--shm-expiry-ms); disconnected");
+        s.protocol->Disconnect();
+      }
+      context_->counters.Add("shm.clients_expired");
+      responder_.Free(s.entry);
+      it = sessions_.erase(it);
+    }
+  }
+
+  ShmOptions options_;
+  std::shared_ptr<ShmRegion> region_;
+  ShmResponder responder_;
+  std::shared_ptr<ShmRingWriter> writer_;
+  std::unique_ptr<ShmReplyReader> reader_;
+  const session::ServerContext* context_ = nullptr;
+  session::ClientId writer_id_ = 0;
+  std::map<uint64_t, std::unique_ptr<ShmSession>> sessions_;  // by client token; shm thread only
+  proto::Envelope request_, reply_;
+  std::thread thread_;
+  std::atomic<bool> stopping_{false};
+  bool stopped_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<Transport> MakeShmTransport(const ShmOptions& options) {
+  return std::make_unique<ShmTransport>(options);
+}
+
+}  // namespace sim4cv::transport

@@ -1,0 +1,99 @@
+// One registered UDP client: its ClientProtocol (the same rules as TCP), its
+// frame mailbox, the frame being cut into chunks, and the UDP-only state
+// (sequence filter, last time heard from, Error rate limit). Lives on the
+// transport's thread, except OfferFrame, which the sim thread calls.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+
+#include "server/session/client_protocol.h"
+#include "server/transport/frame_encoding.h"
+#include "server/transport/udp/frame_chunker.h"
+#include "server/transport/udp/rate_limiter.h"
+#include "server/transport/udp/sequence_filter.h"
+#include "server/transport/udp/udp_socket.h"
+
+namespace sim4cv::transport {
+
+// Wakes the transport's thread from the sim thread: an eventfd written at
+// most once per wake-up, however many frames arrive before the thread runs.
+class Wakeup {
+ public:
+  Wakeup();
+  ~Wakeup();
+  Wakeup(const Wakeup&) = delete;
+  Wakeup& operator=(const Wakeup&) = delete;
+
+  void Notify();
+  // The transport's thread, before it looks for work: later Notify calls
+  // wake it again.
+  void Clear();
+  int fd() const { return fd_; }
+
+ private:
+  int fd_ = -1;
+  std::atomic<bool> pending_{false};
+};
+
+class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<UdpPeer> {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  UdpPeer(session::ClientId client, const PeerAddress& address, const session::ServerContext& context,
+          std::shared_ptr<Wakeup> wakeup, std::size_t max_datagram_bytes, Clock::time_point now);
+
+  // Creates the ClientProtocol; once, right after make_shared.
+  void Start();
+
+  void OfferFrame(const session::FrameRef& frame) override;
+
+  session::ClientId client() const { return client_; }
+  const PeerAddress& address() const { return address_; }
+  session::ClientProtocol& protocol() { return *protocol_; }
+  SequenceFilter& sequence() { return sequence_; }
+  RateLimiter& error_limit() { return error_limit_; }
+
+  void Heard(Clock::time_point now) { last_heard_ = now; }
+  Clock::time_point last_heard() const { return last_heard_; }
+
+  // Frame sending. True if a frame is being chunked (after taking the next
+  // one from the mailbox if none was); false if there is nothing to send.
+  bool NextFrame();
+  const FrameChunker& chunker() const { return chunker_; }
+  uint32_t next_chunk() const { return next_chunk_; }
+  // `count` more chunks are with the kernel; ends the frame after its last.
+  // True if that finished the frame.
+  bool Advance(uint32_t count);
+  // Gives up the rest of the current frame (a send failed).
+  void AbandonFrame();
+
+  // Forgets the client: tells the sim thread (if `disconnect`; a client
+  // whose Hello was refused never reached it) and releases its frames and
+  // its ClientProtocol, which holds a reference back to this peer. Nothing
+  // but OfferFrame may be called afterwards.
+  void Close(bool disconnect);
+
+ private:
+  void EndFrame();
+
+  session::ClientId client_;
+  PeerAddress address_;
+  const session::ServerContext& context_;
+  std::shared_ptr<Wakeup> wakeup_;
+  std::unique_ptr<session::ClientProtocol> protocol_;
+  session::FrameMailbox mailbox_;
+  std::atomic<bool> closed_{false};
+
+  SequenceFilter sequence_;
+  RateLimiter error_limit_;
+  Clock::time_point last_heard_;
+
+  FrameEncoder encoder_;
+  FrameChunker chunker_;
+  session::FrameRef frame_in_flight_;
+  uint32_t next_chunk_ = 0;
+};
+
+}  // namespace sim4cv::transport

@@ -1,0 +1,59 @@
+// A daemon with the shared-memory transport on, under a name unique to this
+// test process, plus helpers shared by the shm integration tests.
+#pragma once
+
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "sim4cv/shm_client.h"
+#include "tests/integration/daemon_fixture.h"
+
+namespace sim4cv::testing {
+
+class ShmDaemonTest : public DaemonTest {
+ protected:
+  ShmDaemonTest() {
+    static int counter = 0;
+    shm_name_ = "/sim4cv-it-" + std::to_string(getpid()) + "-" + std::to_string(++counter);
+  }
+  ~ShmDaemonTest() override { shm_unlink(shm_name_.c_str()); }  // in case the daemon was killed
+
+  void StartShmDaemon(std::vector<std::string> args = {}) {
+    args.insert(args.end(), {"--shm-name", shm_name_});
+    StartDaemon(std::move(args));
+  }
+
+  std::unique_ptr<ShmClient> OpenShm() {
+    auto client = std::make_unique<ShmClient>();
+    client->Open(shm_name_);
+    return client;
+  }
+
+  // Sends GetStats over TCP and returns one counter.
+  static uint64_t Counter(Client& tcp, const std::string& name) {
+    proto::Envelope request;
+    request.mutable_get_stats();
+    tcp.SendEnvelope(request);
+    proto::Envelope reply;
+    while (tcp.ReceiveEnvelope(reply, std::chrono::milliseconds(5000))) {
+      if (!reply.has_stats()) continue;
+      const auto& counters = reply.stats().counters();
+      const auto it = counters.find(name);
+      return it == counters.end() ? 0 : it->second;
+    }
+    ADD_FAILURE() << "no Stats reply";
+    return 0;
+  }
+
+  std::string shm_name_;
+};
+
+inline double Speed(const ShmEntityPose& pose) {
+  return std::hypot(pose.linear_velocity[0], pose.linear_velocity[1], pose.linear_velocity[2]);
+}
+
+}  // namespace sim4cv::testing

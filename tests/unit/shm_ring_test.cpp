@@ -1,0 +1,224 @@
+// Unit tests of the frame ring in one process: the daemon's writer
+// (server/transport/shm/shm_ring_writer.*) against the C++ client's readers
+// (clients/cpp/src/shm/). A writer thread hammers a small ring while readers
+// check that no torn frame is ever accepted; views of overwritten slots
+// report stale without holding the writer back; WaitForFrame wakes.
+#include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "server/transport/shm/shm_ring_writer.h"
+#include "sim4cv/shm_client.h"
+#include "tests/support/no_warnings.h"
+
+namespace sim4cv::transport {
+namespace {
+
+using namespace std::chrono_literals;
+constexpr uint32_t kWidth = 48, kHeight = 32;
+
+// Removes the object at the end of a test even when an assertion ends it early.
+struct Unlinker {
+  std::string name;
+  ~Unlinker() { shm_unlink(name.c_str()); }
+};
+
+ShmRegionParams Params(const std::string& what, uint32_t slots) {
+  ShmRegionParams p;
+  p.name = "/sim4cv-unit-ring-" + what + "-" + std::to_string(getpid());
+  p.camera_name = "uav";
+  p.width = kWidth;
+  p.height = kHeight;
+  p.slot_count = slots;
+  p.reply_capacity = 8;
+  p.response_entries = 2;
+  return p;
+}
+
+// Every value of frame `id` derives from id, so a mix of two frames shows.
+void FillFrame(session::Frame& f, uint64_t id) {
+  const std::size_t pixels = static_cast<std::size_t>(kWidth) * kHeight;
+  f.frame_id = id;
+  f.sim_time = static_cast<double>(id) * 0.5;
+  f.camera_index = 0;
+  f.width = kWidth;
+  f.height = kHeight;
+  f.render_end_mono_ns = static_cast<int64_t>(id) * 7;
+  f.rgb.resize(pixels * 3);
+  for (std::size_t i = 0; i < f.rgb.size(); ++i) f.rgb[i] = static_cast<uint8_t>(id + i);
+  f.depth.assign(pixels, static_cast<float>(id % 1000000));
+  f.mask.assign(pixels, static_cast<uint16_t>(id));
+  f.boxes.resize(id % 4);
+  for (std::size_t b = 0; b < f.boxes.size(); ++b) {
+    f.boxes[b] = {static_cast<uint16_t>(b + 1), 1, static_cast<uint32_t>(id), 2, 3, 4, 99, 0.5f};
+  }
+  f.state.Clear();
+  proto::EntityState* car = f.state.add_entities();
+  car->set_id(1);
+  car->mutable_position()->set_x(static_cast<double>(id));
+}
+
+// Returns an empty string if `frame` is frame `id` throughout.
+std::string Inconsistency(const OwnedFrame& f) {
+  const uint64_t id = f.frame_id;
+  if (f.sim_time != static_cast<double>(id) * 0.5) return "sim_time";
+  if (f.render_end_mono_ns != static_cast<int64_t>(id) * 7) return "render_end_mono_ns";
+  for (std::size_t i = 0; i < f.rgb.size(); ++i) {
+    if (f.rgb[i] != static_cast<uint8_t>(id + i)) return "rgb byte " + std::to_string(i);
+  }
+  for (float d : f.depth) {
+    if (d != static_cast<float>(id % 1000000)) return "depth";
+  }
+  for (uint16_t m : f.mask) {
+    if (m != static_cast<uint16_t>(id)) return "mask";
+  }
+  if (f.boxes.size() != id % 4) return "box count";
+  for (const auto& box : f.boxes) {
+    if (box.x != static_cast<uint32_t>(id)) return "box x";
+  }
+  if (f.entities.size() != 1 || f.entities[0].position[0] != static_cast<double>(id)) return "entity pose";
+  return "";
+}
+
+TEST(ShmRing, HammeredRingNeverYieldsATornFrame) {
+  auto region = std::make_shared<ShmRegion>(Params("hammer", 2));  // 2 slots: maximal reuse
+  const Unlinker cleanup{region->params().name};
+  ShmRingWriter writer(region, 0);
+  std::atomic<bool> done{false};
+  std::atomic<uint64_t> written{0};
+  std::thread writer_thread([&] {
+    session::Frame frame;
+    for (uint64_t id = 1; !done; ++id) {
+      FillFrame(frame, id);
+      writer.Write(frame);
+      written = id;
+    }
+  });
+
+  ShmClient client;
+  client.Open(region->params().name);
+  OwnedFrame frame;
+  uint64_t copies = 0, views_accepted = 0, views_stale = 0, last_id = 0;
+  const auto end = std::chrono::steady_clock::now() + 1500ms;
+  while (std::chrono::steady_clock::now() < end) {
+    if (!client.ReadNewest(frame)) continue;
+    ++copies;
+    const std::string problem = Inconsistency(frame);
+    ASSERT_EQ(problem, "") << "torn copy of frame " << frame.frame_id;
+    ASSERT_GE(frame.frame_id, last_id) << "the newest frame went backwards";
+    last_id = frame.frame_id;
+
+    FrameView view;
+    ASSERT_TRUE(client.AcquireNewest(view));
+    const uint64_t id = view.frame_id();
+    const auto rgb = view.image(proto::CHANNEL_RGB);
+    const auto mask = view.image(proto::CHANNEL_MASK);
+    ASSERT_TRUE(rgb && mask);
+    bool consistent = rgb->stride == kWidth * 3 && view.boxes().size() == id % 4;
+    for (uint32_t i = 0; i < kWidth * kHeight * 3; ++i)
+      consistent = consistent && rgb->data[i] == static_cast<uint8_t>(id + i);
+    const auto* mask_pixels = reinterpret_cast<const uint16_t*>(mask->data);
+    for (uint32_t i = 0; i < kWidth * kHeight; ++i)
+      consistent = consistent && mask_pixels[i] == static_cast<uint16_t>(id);
+    if (view.stale()) {
+      ++views_stale;  // the writer got there first: a reader must discard it
+      EXPECT_THROW(view.Validate(), ShmError);
+    } else {
+      ++views_accepted;
+      ASSERT_TRUE(consistent) << "a view that is not stale had torn pixels (frame " << id << ")";
+    }
+  }
+  done = true;
+  writer_thread.join();
+  EXPECT_GT(written.load(), 1000u);
+  EXPECT_GT(copies, 100u);
+  EXPECT_GT(views_accepted, 0u);
+  std::printf("writer published %llu frames; reader copied %llu consistent frames; views: %llu accepted, %llu stale\n",
+              static_cast<unsigned long long>(written.load()), static_cast<unsigned long long>(copies),
+              static_cast<unsigned long long>(views_accepted), static_cast<unsigned long long>(views_stale));
+}
+
+TEST(ShmRing, UnreleasedViewGoesStaleWithoutBlockingTheWriter) {
+  auto region = std::make_shared<ShmRegion>(Params("stale-view", 3));
+  const Unlinker cleanup{region->params().name};
+  ShmRingWriter writer(region, 0);
+  session::Frame frame;
+  FillFrame(frame, 1);
+  writer.Write(frame);
+  ShmClient client;
+  client.Open(region->params().name);
+  FrameView view;
+  ASSERT_TRUE(client.AcquireNewest(view));
+  EXPECT_EQ(view.frame_id(), 1u);
+  EXPECT_EQ(view.publication(), 1u);
+  EXPECT_EQ(view.width(), kWidth);
+  ASSERT_EQ(view.entities().size(), 1u);
+  EXPECT_FALSE(view.stale());
+  // Two more frames fill the other slots; the view's slot is untouched.
+  for (uint64_t id = 2; id <= 3; ++id) {
+    FillFrame(frame, id);
+    writer.Write(frame);
+  }
+  EXPECT_FALSE(view.stale());
+  view.Validate();
+  // The fourth frame reuses slot 0 at once: the writer never waits for the view.
+  FillFrame(frame, 4);
+  writer.Write(frame);
+  EXPECT_TRUE(view.stale());
+  EXPECT_EQ(client.newest_frame_id(), 4u);
+  EXPECT_EQ(view.frame_id(), 1u) << "the view's metadata is a copy and stays as acquired";
+  view.Release();
+  EXPECT_FALSE(view.valid());
+  EXPECT_TRUE(view.stale());
+}
+
+TEST(ShmRing, IgnoresFramesOfOtherCameras) {
+  auto region = std::make_shared<ShmRegion>(Params("camera", 2));
+  const Unlinker cleanup{region->params().name};
+  ShmRingWriter writer(region, 1);
+  session::Frame frame;
+  FillFrame(frame, 5);  // camera 0
+  writer.Write(frame);
+  EXPECT_EQ(region->header().published, 0u);
+  frame.camera_index = 1;
+  writer.Write(frame);
+  EXPECT_EQ(region->header().published, 1u);
+}
+
+TEST(ShmRing, WaitForFrameWakesOnPublishAndOnClose) {
+  auto region = std::make_shared<ShmRegion>(Params("wait", 2));
+  const Unlinker cleanup{region->params().name};
+  ShmRingWriter writer(region, 0);
+  ShmClient client;
+  client.Open(region->params().name);
+  EXPECT_FALSE(client.WaitForFrame(0, 20ms));
+  std::thread publisher([&] {
+    std::this_thread::sleep_for(50ms);
+    session::Frame frame;
+    FillFrame(frame, 9);
+    writer.Write(frame);
+  });
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_TRUE(client.WaitForFrame(0, 5000ms));
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 2000ms);
+  publisher.join();
+  EXPECT_EQ(client.newest_frame_id(), 9u);
+  EXPECT_TRUE(client.WaitForFrame(8, 0ms));
+  EXPECT_FALSE(client.WaitForFrame(9, 10ms));
+  std::thread closer([&] {
+    std::this_thread::sleep_for(50ms);
+    writer.Close();
+  });
+  EXPECT_THROW(client.WaitForFrame(9, 5000ms), ConnectionError);
+  closer.join();
+  EXPECT_TRUE(client.closed());
+}
+
+}  // namespace
+}  // namespace sim4cv::transport
