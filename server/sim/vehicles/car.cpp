@@ -90,6 +90,8 @@ Car::Car(btDiscreteDynamicsWorld& world, const CarParams& params, const Eigen::V
       raycaster_(std::make_unique<WheelRaycaster>(world, chassis_.body())),
       vehicle_(Tuning(params), &chassis_.body(), raycaster_.get()) {
   // Body axes: x forward, y left, z up (Bullet's indices: right, up, forward).
+  // Bullet pushes a wheel along contact normal x axle, so the axle points
+  // along -y for the engine to drive towards +x; suspensions point down.
   vehicle_.setCoordinateSystem(1, 2, 0);
   const btRaycastVehicle::btVehicleTuning tuning = Tuning(params_);
   for (int wheel = 0; wheel < kWheelCount; ++wheel) {

@@ -9,10 +9,18 @@ namespace sim4cv::vehicles {
 CarDriver::CarDriver(const CarParams& car, Polyline path, double set_speed, const CarDriverParams& params)
     : car_(car), path_(std::move(path)), set_speed_(set_speed), params_(params), speed_pid_(params.speed) {}
 
-double CarDriver::Steering(const Eigen::Vector2d& rear_axle, double yaw, double speed) const {
+Polyline::Projection CarDriver::Track(const Eigen::Vector2d& rear_axle) {
+  Polyline::Projection projection;
+  if (progress_ >= 0) projection = path_.ProjectNear(rear_axle, progress_, params_.search_window);
+  if (progress_ < 0 || projection.distance > params_.relocate_distance) projection = path_.Project(rear_axle);
+  progress_ = projection.arc_length;
+  return projection;
+}
+
+double CarDriver::Steering(const Eigen::Vector2d& rear_axle, double arc_length, double yaw, double speed) const {
   const double lookahead = std::clamp(params_.lookahead_min + params_.lookahead_time * std::abs(speed),
                                       params_.lookahead_min, params_.lookahead_max);
-  const Eigen::Vector2d target = path_.PointAt(path_.Project(rear_axle).arc_length + lookahead);
+  const Eigen::Vector2d target = path_.PointAt(arc_length + lookahead);
   // Target in the car's frame (x forward, y left). The arc from the rear axle,
   // tangent to the heading, through the target has curvature 2 y / d^2; a
   // bicycle model turns that into a wheel angle.
@@ -25,9 +33,10 @@ double CarDriver::Steering(const Eigen::Vector2d& rear_axle, double yaw, double 
   return std::clamp(-wheel_angle_left / max_angle, -1.0, 1.0);  // positive steering is to the right
 }
 
-double CarDriver::TargetSpeed(const Eigen::Vector2d& position) const {
+double CarDriver::TargetSpeed(double arc_length) const {
   if (path_.closed()) return set_speed_;
-  const double remaining = path_.length() - path_.Project(position).arc_length - params_.stop_distance;
+  // From the box centre, half a wheelbase ahead of the rear axle.
+  const double remaining = path_.length() - arc_length - car_.wheelbase / 2.0 - params_.stop_distance;
   if (remaining <= 0.0) return 0.0;
   return std::min(set_speed_, std::sqrt(2.0 * params_.stop_deceleration * remaining));
 }
@@ -39,8 +48,9 @@ CarControls CarDriver::Update(const VehicleState& car, double dt) {
   const Eigen::Vector2d rear_axle = car.position.head<2>() - forward.head<2>().normalized() * (car_.wheelbase / 2.0);
 
   CarControls controls;
-  controls.steering = Steering(rear_axle, yaw, speed);
-  const double target = TargetSpeed(car.position.head<2>());
+  const double arc_length = Track(rear_axle).arc_length;
+  controls.steering = Steering(rear_axle, arc_length, yaw, speed);
+  const double target = TargetSpeed(arc_length);
   if (target == 0.0) {
     controls.brake = 1.0;
     speed_pid_.Reset();

@@ -1,5 +1,6 @@
 // Drives a Car along a polyline at a set speed: pure pursuit on the rear axle
 // for steering, a PI speed loop with drag feed-forward for throttle/brake.
+// Parameters and structure: docs/vehicles.md#car-driver.
 #pragma once
 
 #include "server/sim/vehicles/car.h"
@@ -23,6 +24,11 @@ struct CarDriverParams {
   // end with this deceleration; within `stop_distance` of the end it brakes.
   double stop_deceleration = 2.0;  // m/s^2
   double stop_distance = 0.5;      // m
+  // Progress along the path is tracked by searching only this far (m of
+  // path) either side of the last projection, unless the car is more than
+  // `relocate_distance` off that stretch: then the whole path is searched.
+  double search_window = 20.0;     // m
+  double relocate_distance = 5.0;  // m
 };
 
 class CarDriver {
@@ -37,8 +43,9 @@ class CarDriver {
   const Polyline& path() const { return path_; }
 
  private:
-  double Steering(const Eigen::Vector2d& rear_axle, double yaw, double speed) const;
-  double TargetSpeed(const Eigen::Vector2d& position) const;
+  Polyline::Projection Track(const Eigen::Vector2d& rear_axle);
+  double Steering(const Eigen::Vector2d& rear_axle, double arc_length, double yaw, double speed) const;
+  double TargetSpeed(double arc_length) const;
 
   CarParams car_;
   Polyline path_;
@@ -47,6 +54,7 @@ class CarDriver {
   Pid speed_pid_;
   bool saturated_high_ = false;  // last output beyond full throttle
   bool saturated_low_ = false;   // last output beyond full brake
+  double progress_ = -1.0;       // arc length of the rear axle's last projection; < 0: none yet
 };
 
 }  // namespace sim4cv::vehicles

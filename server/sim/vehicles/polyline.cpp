@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "server/common/check.h"
 
@@ -21,26 +20,63 @@ Polyline::Polyline(std::vector<Eigen::Vector2d> points, bool closed) : points_(s
   }
 }
 
+Polyline::Projection Polyline::OntoSegment(std::size_t i, const Eigen::Vector2d& p) const {
+  const Eigen::Vector2d& a = points_[i];
+  const Eigen::Vector2d ab = SegmentEnd(i) - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  const Eigen::Vector2d q = a + t * ab;
+  return {cumulative_[i] + t * (cumulative_[i + 1] - cumulative_[i]), q, (p - q).norm()};
+}
+
 Polyline::Projection Polyline::Project(const Eigen::Vector2d& p) const {
-  Projection best;
-  best.distance = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < SegmentCount(); ++i) {
-    const Eigen::Vector2d& a = points_[i];
-    const Eigen::Vector2d ab = SegmentEnd(i) - a;
-    const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-    const Eigen::Vector2d q = a + t * ab;
-    const double distance = (p - q).norm();
-    if (distance < best.distance) best = {cumulative_[i] + t * (cumulative_[i + 1] - cumulative_[i]), q, distance};
+  Projection best = OntoSegment(0, p);
+  for (std::size_t i = 1; i < SegmentCount(); ++i) {
+    const Projection candidate = OntoSegment(i, p);
+    if (candidate.distance < best.distance) best = candidate;
   }
   return best;
 }
 
-Eigen::Vector2d Polyline::PointAt(double s) const {
-  if (closed_) s -= std::floor(s / length()) * length();
-  // Segment containing s; beyond an open end, the end segment extrapolated.
+Polyline::Projection Polyline::ProjectNear(const Eigen::Vector2d& p, double arc_length, double window) const {
+  const std::size_t n = SegmentCount();
+  const std::size_t start = SegmentAt(Wrap(arc_length));
+  Projection best = OntoSegment(start, p);
+  auto consider = [&](std::size_t i) {
+    const Projection candidate = OntoSegment(i, p);
+    if (candidate.distance < best.distance) best = candidate;
+  };
+  // Walk outwards from the hint's segment, forwards and backwards, until
+  // `window` metres of path are covered each way (or the path ends).
+  double ahead = cumulative_[start + 1] - Wrap(arc_length);
+  for (std::size_t k = 1; k < n && ahead < window; ++k) {
+    if (!closed_ && start + k >= n) break;
+    const std::size_t i = (start + k) % n;
+    consider(i);
+    ahead += cumulative_[i + 1] - cumulative_[i];
+  }
+  double behind = Wrap(arc_length) - cumulative_[start];
+  for (std::size_t k = 1; k < n && behind < window; ++k) {
+    if (!closed_ && k > start) break;
+    const std::size_t i = (start + n - k) % n;
+    consider(i);
+    behind += cumulative_[i + 1] - cumulative_[i];
+  }
+  return best;
+}
+
+double Polyline::Wrap(double s) const { return closed_ ? s - std::floor(s / length()) * length() : s; }
+
+std::size_t Polyline::SegmentAt(double s) const {
+  // Before an open path's start, the first segment; past its end, the last.
   const auto it = std::upper_bound(cumulative_.begin(), cumulative_.end(), s);
-  const std::size_t i = std::min<std::size_t>(
-      static_cast<std::size_t>(std::max<std::ptrdiff_t>(it - cumulative_.begin() - 1, 0)), SegmentCount() - 1);
+  const std::ptrdiff_t i = std::max<std::ptrdiff_t>(it - cumulative_.begin() - 1, 0);
+  return std::min(static_cast<std::size_t>(i), SegmentCount() - 1);
+}
+
+Eigen::Vector2d Polyline::PointAt(double s) const {
+  s = Wrap(s);
+  // Beyond an open end, the end segment extrapolated.
+  const std::size_t i = SegmentAt(s);
   const Eigen::Vector2d& a = points_[i];
   const double t = (s - cumulative_[i]) / (cumulative_[i + 1] - cumulative_[i]);
   return a + t * (SegmentEnd(i) - a);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <vector>
 
 namespace sim4cv::vehicles {
@@ -22,6 +23,10 @@ class Polyline {
   };
   // Nearest point on the path (every segment is searched).
   Projection Project(const Eigen::Vector2d& p) const;
+  // Nearest point among the segments within `window` metres of path before
+  // and after arc length `arc_length`: for tracking progress along a long
+  // path cheaply, and without jumping to another part of it that passes close.
+  Projection ProjectNear(const Eigen::Vector2d& p, double arc_length, double window) const;
 
   // The point at arc length `s`. Closed: wraps around. Open: continues
   // straight beyond either end, so a lookahead past the end stays defined.
@@ -33,6 +38,9 @@ class Polyline {
 
  private:
   std::size_t SegmentCount() const { return closed_ ? points_.size() : points_.size() - 1; }
+  Projection OntoSegment(std::size_t i, const Eigen::Vector2d& p) const;
+  std::size_t SegmentAt(double s) const;  // the segment containing arc length s (clamped to the ends)
+  double Wrap(double s) const;            // closed: s into [0, length)
   const Eigen::Vector2d& SegmentEnd(std::size_t i) const { return points_[(i + 1) % points_.size()]; }
 
   std::vector<Eigen::Vector2d> points_;
