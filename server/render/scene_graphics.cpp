@@ -6,6 +6,7 @@
 #include "sim4cv.pb.h"
 #include "server/render/camera_math.h"
 #include "server/render/mesh_builder.h"
+#include "server/sim/vehicles/gimbal.h"
 
 namespace sim4cv::render {
 namespace {
@@ -40,9 +41,10 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     labelled_.push_back({static_cast<InstanceId>(b.id), proto::OBJECT_CLASS_BUILDING, 0});
   }
   static_item_count_ = items_.size();
-  meshes_.push_back(MakeCarMesh(scene.car.length, scene.car.width, scene.car.height, {0.80f, 0.10f, 0.10f}));
+  const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();
+  meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.80f, 0.10f, 0.10f}));
   car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
-  meshes_.push_back(MakeUavMesh(scene.uav.span, {0.15f, 0.15f, 0.18f}));
+  meshes_.push_back(MakeUavMesh(2.0f * static_cast<float>(scene.uav.params.half_extents.x()), {0.15f, 0.15f, 0.18f}));
   uav_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   labelled_.insert(labelled_.begin(), {{static_cast<InstanceId>(sim::kCarEntityId), proto::OBJECT_CLASS_CAR, 0},
                                        {static_cast<InstanceId>(sim::kUavEntityId), proto::OBJECT_CLASS_UAV, 0}});
@@ -58,15 +60,21 @@ const std::vector<DrawItem>& SceneGraphics::DrawItems(const sim::State& state) {
 
 CameraView SceneGraphics::CameraAt(std::size_t camera_index, const sim::State& state) const {
   const sim::CameraSpec& spec = scene_.cameras.at(camera_index);
-  // The gimbal holds the pitch whatever the body does; only the body's yaw
-  // turns the camera. The camera hangs just below the body so it never sees it.
-  const sim::BodyState& mount = state.uav;
-  const double yaw = mount.Yaw();
-  const double pitch = spec.pitch_down_deg * std::numbers::pi / 180.0;
-  const Eigen::Vector3d eye = mount.position - Eigen::Vector3d(0, 0, 0.3);
-  const Eigen::Vector3d look(std::cos(yaw) * std::cos(pitch), std::sin(yaw) * std::cos(pitch), -std::sin(pitch));
-  // The camera's own up vector: well defined even when looking straight down.
-  const Eigen::Vector3d up(std::cos(yaw) * std::sin(pitch), std::sin(yaw) * std::sin(pitch), std::cos(pitch));
+  const sim::BodyState& mount = scene_.MountedOnCar(spec) ? state.car : state.uav;
+  const vehicles::Pose body{mount.position, mount.orientation};
+  vehicles::Pose camera;
+  if (spec.gimbal) {
+    camera = vehicles::GimbalCameraPose(body, {spec.pitch_down_deg, spec.offset});
+  } else {
+    const double pitch = spec.pitch_down_deg * std::numbers::pi / 180.0;
+    camera.position = body.position + body.orientation * spec.offset;
+    camera.orientation = body.orientation * Eigen::Quaterniond(Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()));
+  }
+  // Camera frame: x is the viewing direction and z the image's up; the
+  // up vector stays well defined even when looking straight down.
+  const Eigen::Vector3d eye = camera.position;
+  const Eigen::Vector3d look = camera.orientation * Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d up = camera.orientation * Eigen::Vector3d::UnitZ();
   CameraView view;
   view.world_from_camera = LookAt(eye.cast<float>(), (eye + look).cast<float>(), up.cast<float>());
   view.fov_y_deg = spec.fov_y_deg;

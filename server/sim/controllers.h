@@ -10,10 +10,6 @@
 
 namespace sim4cv::sim {
 
-// Pure pursuit along `lane` at the car's cruise speed: steering towards the
-// lane point `lookahead` metres ahead, throttle/brake from a speed P-loop.
-CarCommand FollowLane(const CarSpec& car, const ClosedPath& lane, const BodyState& body);
-
 // Where the camera UAV wants to be: behind the car and `altitude` above it, so
 // that a camera pitched down `pitch_down_deg` looks straight at the car.
 struct UavSetpoint {

@@ -103,7 +103,10 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
   }
   SIM4CV_THROW_UNLESS(camera_width > 0 && camera_height > 0,
                       "camera size " << camera_width << "x" << camera_height << " must be positive");
-  scene.cameras.push_back({"uav", scene.uav.name, camera_width, camera_height, 60.0f, camera_pitch_deg});
+  // The tracking camera under the UAV, and the car's first- and third-person views.
+  scene.cameras.push_back({"uav", scene.uav.name, camera_width, camera_height, 60.0f, camera_pitch_deg, true, {0, 0, -0.3}});
+  scene.cameras.push_back({"car_front", scene.car.name, camera_width, camera_height, 60.0f, 5.0f, false, {2.35, 0, 0.3}});
+  scene.cameras.push_back({"car_chase", scene.car.name, camera_width, camera_height, 60.0f, 15.0f, false, {-9, 0, 3.0}});
   SIM4CV_THROW_UNLESS(scene.road_loop.size() >= 3,
                       "scene '" << scene.name << "' has " << scene.road_loop.size() << " road points; a loop needs at least 3");
   SIM4CV_THROW_UNLESS(scene.buildings.size() < 65535 - kFirstBuildingId, "scene has too many buildings");

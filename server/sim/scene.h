@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "server/sim/vehicles/car.h"
+#include "server/sim/vehicles/quadcopter.h"
+
 namespace sim4cv::sim {
 
 // Ids shared by the protocol (EntityInfo.id), the instance mask and the boxes.
@@ -24,21 +27,14 @@ struct BuildingSpec {
 
 struct CarSpec {
   std::string name = "car";
-  float length = 4.5f, width = 1.8f, height = 1.5f;  // metres
-  float mass = 1200.0f;                               // kg
-  float cruise_speed = 6.0f;                          // m/s, waypoint follower's set speed
-  float lookahead = 8.0f;                             // m, pure pursuit
-  float max_accel = 3.0f;                             // m/s^2
-  float max_brake_decel = 8.0f;                       // m/s^2
-  float max_steer_deg = 35.0f;
-  float wheelbase = 2.7f;                             // m
+  float cruise_speed = 6.0f;   // m/s, the waypoint follower's set speed
+  vehicles::CarParams params;  // the btRaycastVehicle model (docs/vehicles.md)
 };
 
 struct UavSpec {
   std::string name = "uav";
-  float mass = 1.5f;       // kg
-  float span = 0.6f;       // m
-  float altitude = 15.0f;  // m above the car it follows
+  float altitude = 15.0f;             // m above the car it follows
+  vehicles::QuadcopterParams params;  // the quadcopter model (docs/vehicles.md)
 };
 
 struct CameraSpec {
@@ -46,7 +42,11 @@ struct CameraSpec {
   std::string mounted_on;  // entity name
   uint32_t width = 320, height = 180;
   float fov_y_deg = 60.0f;
-  float pitch_down_deg = 60.0f;  // gimbal pitch, held regardless of the body's attitude
+  float pitch_down_deg = 60.0f;  // below the horizon (gimbal) or below the body's x axis (fixed)
+  // true: a gimbal holds the pitch whatever the body's roll and pitch, and
+  // turns only with its yaw; false: rigidly fixed to the body.
+  bool gimbal = true;
+  Eigen::Vector3d offset{0.0, 0.0, -0.3};  // mount point in the body frame (x forward, y left, z up), m
 };
 
 struct Scene {
@@ -58,6 +58,9 @@ struct Scene {
   CarSpec car;
   UavSpec uav;
   std::vector<CameraSpec> cameras;
+
+  // The body state a camera is mounted on.
+  bool MountedOnCar(const CameraSpec& camera) const { return camera.mounted_on == car.name; }
 
   // Index of the camera called `name`, or -1.
   int FindCamera(const std::string& name) const;

@@ -1,6 +1,11 @@
-// The Bullet world: the only code that touches Bullet. It reads actuator
-// commands from State, applies forces, takes one fixed physics step and
-// writes the bodies' poses and velocities back into State.
+// The Bullet world: the only code that touches Bullet. Per physics step it
+// turns the State's commands into the vehicles' actuator inputs, steps the
+// world once, and writes the bodies' poses and velocities back into State.
+//
+// Unlike a pure mjData, the vehicles keep some step-to-step state of their own
+// (the wheels' steering angle, the controllers' integrators, Bullet's contact
+// cache); State holds everything observable. Two Worlds built from the same
+// Scene and stepped with the same commands produce bit-identical States.
 #pragma once
 
 #include <memory>
@@ -22,21 +27,19 @@ class World {
   // The state at time zero: car at the start of its lane, UAV on station.
   State InitialState() const;
 
-  // Advances `state` by one physics step of `dt` seconds. Deterministic: the
-  // same state and commands give the same result.
+  // Advances `state` by one physics step of `dt` seconds. Deterministic.
   void Step(State& state, double dt);
 
   // The lane the car's waypoint follower drives (right lane of the road loop).
   const ClosedPath& car_lane() const { return car_lane_; }
 
  private:
-  struct Bullet;
-  void ApplyCarForces(const State& state, double dt);
-  void ApplyUavForces(const State& state);
+  struct Bodies;
 
   const Scene& scene_;
   ClosedPath car_lane_;
-  std::unique_ptr<Bullet> bullet_;
+  std::unique_ptr<Bodies> bodies_;
+  State initial_state_;  // taken when the bodies were spawned
 };
 
 }  // namespace sim4cv::sim

@@ -19,10 +19,16 @@ TEST_F(DaemonTest, ListeningLineAndWelcomeDescribeTheScene) {
   const proto::Welcome& welcome = client->welcome();
   EXPECT_EQ(welcome.protocol_version(), 1u);
   EXPECT_EQ(welcome.scene_name(), "default");
-  ASSERT_EQ(welcome.cameras_size(), 1);
+  ASSERT_EQ(welcome.cameras_size(), 3);
   EXPECT_EQ(welcome.cameras(0).name(), "uav");
-  EXPECT_EQ(welcome.cameras(0).width(), 160u);
-  EXPECT_EQ(welcome.cameras(0).height(), 96u);
+  EXPECT_EQ(welcome.cameras(0).mounted_on(), "uav");
+  EXPECT_EQ(welcome.cameras(1).name(), "car_front");
+  EXPECT_EQ(welcome.cameras(2).name(), "car_chase");
+  EXPECT_EQ(welcome.cameras(2).mounted_on(), "car");
+  for (const auto& camera : welcome.cameras()) {
+    EXPECT_EQ(camera.width(), 160u);
+    EXPECT_EQ(camera.height(), 96u);
+  }
   EXPECT_EQ(welcome.mode(), proto::SIM_MODE_LOCKSTEP);
   EXPECT_DOUBLE_EQ(welcome.physics_hz(), 240.0);
   EXPECT_DOUBLE_EQ(welcome.frame_hz(), 30.0);
@@ -96,6 +102,35 @@ TEST_F(DaemonTest, LockstepWaitsForEveryClientAndNotForOneThatLeft) {
   b->Close();  // b goes away without stepping: a must not wait for it
   ASSERT_TRUE(a->ReceiveFrame(frame, 5000ms)) << "lockstep stalled on a client that disconnected";
   EXPECT_EQ(frame.frame_id(), 2u);
+}
+
+TEST_F(DaemonTest, CarCamerasSeeTheRoadAndTheChaseCameraSeesTheCar) {
+  StartDaemon();
+  auto front = Connect("front");
+  auto chase = Connect("chase");
+  front->Subscribe("car_front", {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH}, proto::DELIVERY_LOCKSTEP);
+  chase->Subscribe("car_chase", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
+  for (int i = 0; i < 30; ++i) {
+    front->Step();
+    chase->Step();
+    proto::Frame front_frame, chase_frame;
+    ASSERT_TRUE(front->ReceiveFrame(front_frame, 5000ms));
+    ASSERT_TRUE(chase->ReceiveFrame(chase_frame, 5000ms));
+    EXPECT_EQ(front_frame.frame_id(), chase_frame.frame_id());
+    EXPECT_EQ(front_frame.camera(), "car_front");
+    // The chase camera, 9 m behind and 3 m above, always has the car in view.
+    bool car_seen = false;
+    for (const auto& box : chase_frame.boxes()) car_seen = car_seen || box.object_id() == 1;
+    EXPECT_TRUE(car_seen) << "frame " << chase_frame.frame_id();
+    // The first-person camera looks down the road: the bottom row's depth is
+    // a few metres (the road just ahead), not infinite.
+    const auto depth = FindImage(front_frame, proto::CHANNEL_DEPTH);
+    ASSERT_TRUE(depth);
+    const auto* metres = reinterpret_cast<const float*>(depth->data);
+    const float bottom_centre = metres[(front_frame.height() - 1) * front_frame.width() + front_frame.width() / 2];
+    EXPECT_GT(bottom_centre, 0.5f);
+    EXPECT_LT(bottom_centre, 20.0f);
+  }
 }
 
 TEST_F(DaemonTest, NewestFrameSubscriberInLockstepSeesTheLockstepFrames) {

@@ -14,10 +14,6 @@ namespace {
 using Eigen::Vector3d;
 constexpr double kPi = std::numbers::pi;
 
-// A long counter-clockwise rectangle: its bottom side (y = 0, driving east)
-// is a 1 km straight.
-ClosedPath LongLoop() { return ClosedPath({{0, 0}, {1000, 0}, {1000, 100}, {0, 100}}); }
-
 BodyState Car(double x, double y, double yaw, double speed) {
   BodyState body;
   body.position = {x, y, 0.75};
@@ -29,79 +25,6 @@ BodyState Car(double x, double y, double yaw, double speed) {
 TEST(ControllersTest, YawOfABody) {
   EXPECT_NEAR(Car(0, 0, 0.3, 0).Yaw(), 0.3, 1e-12);
   EXPECT_NEAR(Car(0, 0, -2.0, 0).Yaw(), -2.0, 1e-12);
-}
-
-TEST(ControllersTest, FollowLaneAlignedOnAStraightKeepsTheWheelStraight) {
-  const CarSpec spec;
-  const CarCommand command = FollowLane(spec, LongLoop(), Car(100, 0, 0, spec.cruise_speed));
-  EXPECT_NEAR(command.steering, 0.0f, 1e-6);
-  EXPECT_FALSE(command.manual);
-}
-
-TEST(ControllersTest, FollowLaneSteersRightWhenTheLaneIsToTheRight) {
-  const CarSpec spec;
-  // Heading east with the lane (y = 0) 2 m to the south: to the car's right.
-  const CarCommand command = FollowLane(spec, LongLoop(), Car(100, 2, 0, spec.cruise_speed));
-  EXPECT_GT(command.steering, 0.05f);
-  EXPECT_LE(command.steering, 1.0f);
-}
-
-TEST(ControllersTest, FollowLaneSteersLeftWhenTheLaneIsToTheLeft) {
-  const CarSpec spec;
-  const CarCommand command = FollowLane(spec, LongLoop(), Car(100, -2, 0, spec.cruise_speed));
-  EXPECT_LT(command.steering, -0.05f);
-  EXPECT_GE(command.steering, -1.0f);
-}
-
-TEST(ControllersTest, FollowLaneSteersBackWhenHeadingAwayFromTheLane) {
-  const CarSpec spec;
-  // On the lane but pointing 20 degrees left of it: steer right.
-  EXPECT_GT(FollowLane(spec, LongLoop(), Car(100, 0, 20 * kPi / 180, spec.cruise_speed)).steering, 0.05f);
-  // Pointing 20 degrees right of it: steer left.
-  EXPECT_LT(FollowLane(spec, LongLoop(), Car(100, 0, -20 * kPi / 180, spec.cruise_speed)).steering, -0.05f);
-}
-
-TEST(ControllersTest, FollowLaneSteeringSaturates) {
-  CarSpec spec;
-  spec.max_steer_deg = 20;
-  // Pointing north off an eastbound lane: the target lies 8 m to the right,
-  // which wants ~34 degrees of lock, more than the 20 the car has.
-  const CarCommand command = FollowLane(spec, LongLoop(), Car(100, 0, kPi / 2, spec.cruise_speed));
-  EXPECT_FLOAT_EQ(command.steering, 1.0f);
-}
-
-TEST(ControllersTest, FollowLaneThrottlesWhenSlowerThanCruise) {
-  const CarSpec spec;  // cruise 6 m/s, max_accel 3, gain 1.5
-  const CarCommand stopped = FollowLane(spec, LongLoop(), Car(100, 0, 0, 0));
-  EXPECT_FLOAT_EQ(stopped.throttle, 1.0f);
-  EXPECT_FLOAT_EQ(stopped.brake, 0.0f);
-  const CarCommand slow = FollowLane(spec, LongLoop(), Car(100, 0, 0, 5));
-  EXPECT_NEAR(slow.throttle, 1.5 * 1.0 / 3.0, 1e-6);
-  EXPECT_FLOAT_EQ(slow.brake, 0.0f);
-}
-
-TEST(ControllersTest, FollowLaneBrakesWhenFasterThanCruise) {
-  const CarSpec spec;  // max_brake_decel 8
-  const CarCommand fast = FollowLane(spec, LongLoop(), Car(100, 0, 0, 8));
-  EXPECT_FLOAT_EQ(fast.throttle, 0.0f);
-  EXPECT_NEAR(fast.brake, 1.5 * 2.0 / 8.0, 1e-6);
-  const CarCommand very_fast = FollowLane(spec, LongLoop(), Car(100, 0, 0, 30));
-  EXPECT_FLOAT_EQ(very_fast.brake, 1.0f);
-}
-
-TEST(ControllersTest, FollowLaneAtCruiseSpeedCoasts) {
-  const CarSpec spec;
-  const CarCommand command = FollowLane(spec, LongLoop(), Car(100, 0, 0, spec.cruise_speed));
-  EXPECT_FLOAT_EQ(command.throttle, 0.0f);
-  EXPECT_FLOAT_EQ(command.brake, 0.0f);
-}
-
-TEST(ControllersTest, FollowLaneUsesForwardSpeedNotSideways) {
-  const CarSpec spec;
-  // Sliding sideways at 10 m/s while pointing east: the forward speed is 0.
-  BodyState body = Car(100, 0, 0, 0);
-  body.linear_velocity = {0, 10, 0};
-  EXPECT_FLOAT_EQ(FollowLane(spec, LongLoop(), body).throttle, 1.0f);
 }
 
 TEST(ControllersTest, FollowCarHoldsStationBehindAndAbove) {

@@ -48,7 +48,7 @@ TEST(SceneTest, DefaultSceneParses) {
   EXPECT_FLOAT_EQ(scene.buildings[0].centre.x(), -30.0f);
   EXPECT_FLOAT_EQ(scene.buildings[0].half_size.y(), 10.0f);
   EXPECT_FLOAT_EQ(scene.buildings[0].height, 12.0f);
-  ASSERT_EQ(scene.cameras.size(), 1u);
+  ASSERT_EQ(scene.cameras.size(), 3u);  // uav, car_front, car_chase
   EXPECT_EQ(scene.cameras[0].name, "uav");
   EXPECT_EQ(scene.cameras[0].mounted_on, scene.uav.name);
   EXPECT_EQ(scene.cameras[0].width, 640u);
@@ -82,7 +82,7 @@ TEST(SceneTest, EveryKeywordIsApplied) {
   EXPECT_FLOAT_EQ(scene.lane_width, 3.5f);
   EXPECT_FLOAT_EQ(scene.car.cruise_speed, 9.0f);
   EXPECT_FLOAT_EQ(scene.uav.altitude, 20.0f);
-  ASSERT_EQ(scene.cameras.size(), 1u);
+  ASSERT_EQ(scene.cameras.size(), 3u);  // uav, car_front, car_chase
   EXPECT_FLOAT_EQ(scene.cameras[0].pitch_down_deg, 45.0f);
   EXPECT_EQ(scene.cameras[0].width, 100u);
   EXPECT_EQ(scene.cameras[0].height, 50u);

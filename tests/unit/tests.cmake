@@ -27,3 +27,11 @@ sim4cv_test(unit quadcopter_test sim4cv_vehicles)
 sim4cv_test(unit map_shipped_test sim4cv_map)
 target_compile_definitions(map_shipped_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOURCE_DIR}")  # finds scenes/**/*.map
 sim4cv_test(unit gimbal_test sim4cv_vehicles)
+sim4cv_test(unit map_render_test sim4cv_map_render ${OpenCV_LIBS})
+sim4cv_test(unit runlog_test sim4cv_runlog sim4cv_protocol)
+sim4cv_test(unit runlog_recovery_test sim4cv_runlog)
+sim4cv_test(unit runlog_alloc_test sim4cv_runlog)
+sim4cv_test(unit replay_track_test sim4cv_runlog)
+sim4cv_test(unit logdraw_test sim4cv_runlog sim4cv_map ${OpenCV_LIBS})
+target_compile_definitions(logdraw_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOURCE_DIR}" SIM4CV_LOGDRAW_PATH="$<TARGET_FILE:sim4cv_logdraw>")
+add_dependencies(logdraw_test sim4cv_logdraw)  # the test runs the tool
