@@ -38,6 +38,9 @@ frames offscreen with OSMesa and serves them to clients (see docs/protocol.md).
 Usage: sim4cvd [flags]
 
   --scene FILE              scene file to load (docs/scenes.md); default: the embedded default scene
+  --map FILE                a tile map to load instead (docs/maps.md), e.g. scenes/tracking/easy_urban.map
+  --route NAME              the map's closed route the target car drives (default: its first closed route)
+  --car-speed M/S           the target car's set speed on a map (default 6; the paper uses 4, 6 and 8)
   --seed N                  seed for every random choice of the simulation (default 1)
   --bind ADDRESS            address the TCP port listens on (default 127.0.0.1; 0.0.0.0 for all)
   --tcp-port N              TCP port; 0 picks any free port (default 0)
@@ -72,6 +75,9 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   using Setter = std::function<void(const std::string& flag, const std::string& value)>;
   const std::map<std::string, Setter> setters = {
       {"--scene", [&](auto&, auto& v) { config.scene_file = v; }},
+      {"--map", [&](auto&, auto& v) { config.map_file = v; }},
+      {"--route", [&](auto&, auto& v) { config.route = v; }},
+      {"--car-speed", [&](auto& f, auto& v) { config.car_speed = ParseNumber<float>(f, v, 0.1f, 40.0f); }},
       {"--seed", [&](auto& f, auto& v) { config.seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
       {"--bind", [&](auto&, auto& v) { config.bind_address = v; }},
       {"--tcp-port", [&](auto& f, auto& v) { config.tcp_port = ParseNumber<uint16_t>(f, v, 0, 65535); }},
@@ -120,6 +126,8 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
     setter->second(args[i], args[i + 1]);
     ++i;
   }
+  SIM4CV_THROW_UNLESS(config.scene_file.empty() || config.map_file.empty(),
+                      "--scene and --map both given; pick one");
   const double ratio = config.physics_hz / config.frame_hz;
   SIM4CV_THROW_UNLESS(std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1,
                       "--physics-hz " << config.physics_hz << " must be a whole multiple of --frame-hz " << config.frame_hz);

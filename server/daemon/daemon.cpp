@@ -58,8 +58,11 @@ int RunDaemon(const Config& config) {
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   signal(SIGPIPE, SIG_IGN);  // a client that vanishes must not kill the daemon
 
-  const sim::Scene scene = config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
-                                                     : sim::LoadSceneFile(config.scene_file, config.width, config.height);
+  const sim::Scene scene =
+      !config.map_file.empty()
+          ? sim::SceneFromMap(config.map_file, config.route, config.car_speed, config.width, config.height)
+      : config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
+                                  : sim::LoadSceneFile(config.scene_file, config.width, config.height);
 
   std::vector<std::unique_ptr<transport::Transport>> transports;
   transports.push_back(transport::MakeTcpTransport(

@@ -5,6 +5,7 @@
 
 #include "sim4cv.pb.h"
 #include "server/render/camera_math.h"
+#include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
 #include "server/sim/vehicles/gimbal.h"
 
@@ -29,9 +30,17 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     meshes_.push_back(std::move(mesh));
     items_.push_back({static_cast<MeshId>(meshes_.size() - 1), pose, instance});
   };
-  add_static(MakeGroundPlane(scene.ground_half_size, {0.55f, 0.50f, 0.40f}), kUnlabelled, Eigen::Matrix4f::Identity());
-  add_static(MakeRoadLoop(scene.road_loop, scene.lane_width, {0.22f, 0.22f, 0.24f}, {0.95f, 0.95f, 0.92f}), kUnlabelled,
-             Eigen::Matrix4f::Identity());
+  if (scene.map) {
+    // Tile maps bring their own ground, roads and labelled dressing.
+    for (auto& drawable : BuildMapDrawables(*scene.map, *scene.road_graph, static_cast<InstanceId>(sim::kFirstBuildingId))) {
+      add_static(std::move(drawable.mesh), drawable.instance, drawable.world_from_model);
+      if (drawable.instance != kUnlabelled) labelled_.push_back({drawable.instance, drawable.object_class, 0});
+    }
+  } else {
+    add_static(MakeGroundPlane(scene.ground_half_size, {0.55f, 0.50f, 0.40f}), kUnlabelled, Eigen::Matrix4f::Identity());
+    add_static(MakeRoadLoop(scene.road_loop, scene.lane_width, {0.22f, 0.22f, 0.24f}, {0.95f, 0.95f, 0.92f}), kUnlabelled,
+               Eigen::Matrix4f::Identity());
+  }
   for (std::size_t i = 0; i < scene.buildings.size(); ++i) {
     const auto& b = scene.buildings[i];
     const Eigen::Vector3f half(b.half_size.x(), b.half_size.y(), b.height / 2.0f);

@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "server/common/check.h"
+#include "server/sim/closed_path.h"
+#include "server/sim/map/map_text.h"
 
 namespace sim4cv::sim {
 
@@ -19,6 +21,14 @@ int Scene::FindCamera(const std::string& camera_name) const {
 }
 
 namespace {
+
+// The tracking camera under the UAV, and the car's first- and third-person views.
+void AddStandardCameras(Scene& scene, uint32_t width, uint32_t height, float uav_pitch_deg) {
+  SIM4CV_THROW_UNLESS(width > 0 && height > 0, "camera size " << width << "x" << height << " must be positive");
+  scene.cameras.push_back({"uav", scene.uav.name, width, height, 60.0f, uav_pitch_deg, true, {0, 0, -0.3}});
+  scene.cameras.push_back({"car_front", scene.car.name, width, height, 60.0f, 5.0f, false, {2.35, 0, 0.3}});
+  scene.cameras.push_back({"car_chase", scene.car.name, width, height, 60.0f, 15.0f, false, {-9, 0, 3.0}});
+}
 
 // Reads exactly `count` numbers from the rest of a line.
 std::vector<float> ReadNumbers(std::istringstream& words, std::size_t count, int line_number, const std::string& line) {
@@ -101,15 +111,40 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
     SIM4CV_THROW_UNLESS(handler != handlers.end(), "scene line " << line_number << ": unknown keyword '" << keyword << "'");
     handler->second(words);
   }
-  SIM4CV_THROW_UNLESS(camera_width > 0 && camera_height > 0,
-                      "camera size " << camera_width << "x" << camera_height << " must be positive");
-  // The tracking camera under the UAV, and the car's first- and third-person views.
-  scene.cameras.push_back({"uav", scene.uav.name, camera_width, camera_height, 60.0f, camera_pitch_deg, true, {0, 0, -0.3}});
-  scene.cameras.push_back({"car_front", scene.car.name, camera_width, camera_height, 60.0f, 5.0f, false, {2.35, 0, 0.3}});
-  scene.cameras.push_back({"car_chase", scene.car.name, camera_width, camera_height, 60.0f, 15.0f, false, {-9, 0, 3.0}});
   SIM4CV_THROW_UNLESS(scene.road_loop.size() >= 3,
                       "scene '" << scene.name << "' has " << scene.road_loop.size() << " road points; a loop needs at least 3");
   SIM4CV_THROW_UNLESS(scene.buildings.size() < 65535 - kFirstBuildingId, "scene has too many buildings");
+  AddStandardCameras(scene, camera_width, camera_height, camera_pitch_deg);
+  std::vector<Eigen::Vector2d> road;
+  for (const auto& p : scene.road_loop) road.push_back(p.cast<double>());
+  // Right-hand traffic: the car drives the lane half a lane to the right of the centre line.
+  scene.car_lane = ClosedPath::Offset(road, scene.lane_width / 2.0).points();
+  return scene;
+}
+
+Scene SceneFromMap(const std::string& map_path, const std::string& route_name, float car_speed, uint32_t camera_width,
+                   uint32_t camera_height) {
+  SIM4CV_THROW_UNLESS(car_speed > 0, "car speed " << car_speed << " must be > 0");
+  Scene scene;
+  auto loaded = std::make_shared<map::Map>(map::LoadMapFile(map_path));
+  SIM4CV_THROW_UNLESS(loaded->objects.size() < 65535 - kFirstBuildingId,
+                      "map '" << map_path << "' has " << loaded->objects.size() << " objects; at most "
+                              << 65535 - kFirstBuildingId - 1 << " fit the instance ids");
+  const map::Route* route = nullptr;
+  for (const auto& candidate : loaded->routes) {
+    if (route_name.empty() ? candidate.closed : candidate.name == route_name) route = &candidate;
+    if (route) break;
+  }
+  SIM4CV_THROW_UNLESS(route, "map '" << map_path << "' has no " << (route_name.empty() ? "closed route" : "route named '" + route_name + "'"));
+  SIM4CV_THROW_UNLESS(route->closed, "route '" << route->name << "' of map '" << map_path
+                                               << "' is open; the target car needs a closed route");
+  scene.name = loaded->name;
+  scene.ground_half_size = static_cast<float>(loaded->HalfExtent().maxCoeff() + 50.0);
+  scene.road_graph = std::make_shared<map::RoadGraph>(*loaded);
+  scene.car_lane = scene.road_graph->SampleRoute(*route, 1.0).points;
+  scene.map = std::move(loaded);
+  scene.car.cruise_speed = car_speed;
+  AddStandardCameras(scene, camera_width, camera_height, 60.0f);
   return scene;
 }
 

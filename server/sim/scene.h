@@ -4,9 +4,12 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "server/sim/map/map.h"
+#include "server/sim/map/road_graph.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/quadcopter.h"
 
@@ -58,6 +61,12 @@ struct Scene {
   CarSpec car;
   UavSpec uav;
   std::vector<CameraSpec> cameras;
+  // The closed lane centre line the target car drives, in driving order.
+  std::vector<Eigen::Vector2d> car_lane;
+  // Set for scenes built from a tile map (docs/maps.md); road_loop and
+  // buildings are then empty and the map's objects stand in for them.
+  std::shared_ptr<const map::Map> map;
+  std::shared_ptr<const map::RoadGraph> road_graph;
 
   // The body state a camera is mounted on.
   bool MountedOnCar(const CameraSpec& camera) const { return camera.mounted_on == car.name; }
@@ -69,6 +78,12 @@ struct Scene {
 // Parses the scene text format (docs/scenes.md). Throws std::invalid_argument
 // naming the line number and the offending text.
 Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera_height);
+
+// A scene on a tile map: the target car drives the map's closed route
+// `route_name` (empty: the first closed route) at `car_speed`, the camera UAV
+// follows it. Throws std::invalid_argument naming the file or route.
+Scene SceneFromMap(const std::string& map_path, const std::string& route_name, float car_speed, uint32_t camera_width,
+                   uint32_t camera_height);
 
 // Reads and parses a scene file.
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height);

@@ -14,13 +14,6 @@
 namespace sim4cv::sim {
 namespace {
 
-std::vector<Eigen::Vector2d> ToDouble(const std::vector<Eigen::Vector2f>& points) {
-  std::vector<Eigen::Vector2d> out;
-  out.reserve(points.size());
-  for (const auto& p : points) out.push_back(p.cast<double>());
-  return out;
-}
-
 void CopyState(const vehicles::VehicleState& in, BodyState& out) {
   out.position = in.position;
   out.orientation = in.orientation;
@@ -60,7 +53,7 @@ struct World::Bodies {
 
 World::World(const Scene& scene)
     : scene_(scene),
-      car_lane_(ClosedPath::Offset(ToDouble(scene.road_loop), scene.lane_width / 2.0)),
+      car_lane_(scene.car_lane),
       bodies_(std::make_unique<Bodies>()) {
   auto& b = *bodies_;
   b.world.setGravity(btVector3(0, 0, -9.81));
@@ -70,6 +63,15 @@ World::World(const Scene& scene)
                            btVector3(building.centre.x(), building.centre.y(), building.height / 2.0f));
     b.AddStatic(std::make_unique<btBoxShape>(btVector3(building.half_size.x(), building.half_size.y(), building.height / 2.0f)),
                 pose);
+  }
+  if (scene.map) {
+    for (const auto& object : scene.map->objects) {
+      if (object.kind == map::ObjectKind::kPark) continue;  // lawn and benches: nothing a car hits
+      const map::ObjectShape& shape = map::ShapeOf(object.kind);
+      const btTransform pose(btQuaternion(btVector3(0, 0, 1), btScalar(object.rotation_deg * std::numbers::pi / 180.0)),
+                             btVector3(object.position.x(), object.position.y(), shape.height / 2.0));
+      b.AddStatic(std::make_unique<btBoxShape>(btVector3(shape.half_x, shape.half_y, shape.height / 2.0)), pose);
+    }
   }
 
   const Eigen::Vector2d start = car_lane_.PointAt(0.0);
