@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <climits>
 
+#include "requests.h"
 #include "socket_io.h"
 
 namespace sim4cv {
@@ -62,9 +63,7 @@ void Client::Connect(const std::string& host, uint16_t port, const std::string& 
   const detail::Deadline deadline = DeadlineAfter(timeout);
   ConnectRaw(host, port, timeout);
   try {
-    Envelope hello;
-    hello.mutable_hello()->set_protocol_version(protocol_version == 0 ? wire::kProtocolVersion : protocol_version);
-    hello.mutable_hello()->set_client_name(client_name);
+    const Envelope hello = detail::HelloRequest(client_name, protocol_version);
     SendEnvelope(hello);
     Envelope reply;
     if (!ReceiveKind(Envelope::kWelcome, reply, deadline)) {
@@ -80,12 +79,7 @@ void Client::Connect(const std::string& host, uint16_t port, const std::string& 
 void Client::Subscribe(const std::string& camera, const std::vector<proto::Channel>& channels, proto::Delivery delivery,
                        bool with_state, Duration timeout) {
   const detail::Deadline deadline = DeadlineAfter(timeout);
-  Envelope request;
-  proto::Subscribe& subscribe = *request.mutable_subscribe();
-  subscribe.set_camera(camera);
-  for (const proto::Channel channel : channels) subscribe.add_channels(channel);
-  subscribe.set_delivery(delivery);
-  subscribe.set_with_state(with_state);
+  const Envelope request = detail::SubscribeRequest(camera, channels, delivery, with_state);
   SendEnvelope(request);
   Envelope reply;
   if (!ReceiveKind(Envelope::kSubscribed, reply, deadline)) {
@@ -97,9 +91,7 @@ void Client::Subscribe(const std::string& camera, const std::vector<proto::Chann
 }
 
 void Client::Step() {
-  Envelope step;
-  step.mutable_step();
-  SendEnvelope(step);
+  SendEnvelope(detail::StepRequest());
 }
 
 bool Client::ReceiveFrame(proto::Frame& frame, Duration timeout) {
@@ -117,25 +109,11 @@ const proto::Frame& Client::StepAndReceive(Duration timeout) {
 }
 
 void Client::SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence) {
-  Envelope envelope;
-  proto::TrackerOutput& output = *envelope.mutable_tracker_output();
-  output.set_frame_id(frame_id);
-  output.mutable_box()->set_x(x);
-  output.mutable_box()->set_y(y);
-  output.mutable_box()->set_width(width);
-  output.mutable_box()->set_height(height);
-  output.set_confidence(confidence);
-  SendEnvelope(envelope);
+  SendEnvelope(detail::TrackerOutputRequest(frame_id, x, y, width, height, confidence));
 }
 
 void Client::SendControls(uint32_t entity_id, float steering, float throttle, float brake) {
-  Envelope envelope;
-  proto::Controls& controls = *envelope.mutable_controls();
-  controls.set_entity_id(entity_id);
-  controls.set_steering(steering);
-  controls.set_throttle(throttle);
-  controls.set_brake(brake);
-  SendEnvelope(envelope);
+  SendEnvelope(detail::ControlsRequest(entity_id, steering, throttle, brake));
 }
 
 proto::State Client::GetState(Duration timeout) {

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "protocol/framing.h"
+#include "../requests.h"
 #include "protocol/shm_sync.h"
 #include "sim4cv/shm_client.h"
 
@@ -187,9 +188,7 @@ bool ShmClient::ReceiveKind(Envelope::KindCase kind, Envelope& out, Deadline dea
 
 proto::Welcome ShmClient::Hello(const std::string& client_name, Duration timeout, uint32_t protocol_version) {
   const Deadline deadline = std::chrono::steady_clock::now() + timeout;
-  Envelope hello;
-  hello.mutable_hello()->set_protocol_version(protocol_version == 0 ? wire::kProtocolVersion : protocol_version);
-  hello.mutable_hello()->set_client_name(client_name);
+  const Envelope hello = detail::HelloRequest(client_name, protocol_version);
   had_entry_ = false;  // a Hello may legitimately find our old entry gone
   SendEnvelope(hello);
   Envelope reply;
@@ -203,13 +202,9 @@ proto::Welcome ShmClient::Hello(const std::string& client_name, Duration timeout
 
 void ShmClient::Subscribe(proto::Delivery delivery, Duration timeout) {
   const Deadline deadline = std::chrono::steady_clock::now() + timeout;
-  Envelope request;
-  proto::Subscribe* subscribe = request.mutable_subscribe();
-  subscribe->set_camera(camera());
-  for (proto::Channel c : {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_BOXES}) {
-    subscribe->add_channels(c);
-  }
-  subscribe->set_delivery(delivery);
+  // The ring carries every channel, so the subscription asks for all of them.
+  const Envelope request = detail::SubscribeRequest(
+      camera(), {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_BOXES}, delivery, false);
   SendEnvelope(request);
   Envelope reply;
   if (!ReceiveKind(Envelope::kSubscribed, reply, deadline)) {
@@ -219,31 +214,15 @@ void ShmClient::Subscribe(proto::Delivery delivery, Duration timeout) {
 }
 
 void ShmClient::Step() {
-  Envelope step;
-  step.mutable_step();
-  SendEnvelope(step);
+  SendEnvelope(detail::StepRequest());
 }
 
 void ShmClient::SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence) {
-  Envelope envelope;
-  proto::TrackerOutput* output = envelope.mutable_tracker_output();
-  output->set_frame_id(frame_id);
-  output->mutable_box()->set_x(x);
-  output->mutable_box()->set_y(y);
-  output->mutable_box()->set_width(width);
-  output->mutable_box()->set_height(height);
-  output->set_confidence(confidence);
-  SendEnvelope(envelope);
+  SendEnvelope(detail::TrackerOutputRequest(frame_id, x, y, width, height, confidence));
 }
 
 void ShmClient::SendControls(uint32_t entity_id, float steering, float throttle, float brake) {
-  Envelope envelope;
-  proto::Controls* controls = envelope.mutable_controls();
-  controls->set_entity_id(entity_id);
-  controls->set_steering(steering);
-  controls->set_throttle(throttle);
-  controls->set_brake(brake);
-  SendEnvelope(envelope);
+  SendEnvelope(detail::ControlsRequest(entity_id, steering, throttle, brake));
 }
 
 proto::State ShmClient::GetState(Duration timeout) {

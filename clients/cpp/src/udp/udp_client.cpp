@@ -9,6 +9,7 @@
 
 #include "frame_reassembler.h"
 #include "protocol/framing.h"
+#include "../requests.h"
 #include "udp_io.h"
 
 namespace sim4cv {
@@ -56,9 +57,7 @@ void UdpClient::Connect(const std::string& host, uint16_t port, const std::strin
   const Deadline deadline = Clock::now() + timeout;
   Open(host, port);
   try {
-    Envelope hello;
-    hello.mutable_hello()->set_protocol_version(protocol_version == 0 ? wire::kProtocolVersion : protocol_version);
-    hello.mutable_hello()->set_client_name(client_name);
+    const Envelope hello = detail::HelloRequest(client_name, protocol_version);
     Envelope reply;
     if (!Request(hello, Envelope::kWelcome, reply, deadline)) {
       throw ConnectionError(TimeoutMessage("Welcome", timeout, peer_) + " (is that the udp= port of its listening line?)");
@@ -72,12 +71,7 @@ void UdpClient::Connect(const std::string& host, uint16_t port, const std::strin
 
 void UdpClient::Subscribe(const std::string& camera, const std::vector<proto::Channel>& channels,
                           proto::Delivery delivery, bool with_state, Duration timeout) {
-  Envelope request;
-  proto::Subscribe& subscribe = *request.mutable_subscribe();
-  subscribe.set_camera(camera);
-  for (const proto::Channel channel : channels) subscribe.add_channels(channel);
-  subscribe.set_delivery(delivery);
-  subscribe.set_with_state(with_state);
+  const Envelope request = detail::SubscribeRequest(camera, channels, delivery, with_state);
   std::erase_if(pending_, [](const Envelope& queued) { return queued.has_subscribed(); });  // stray answers to retries
   Envelope reply;
   if (!Request(request, Envelope::kSubscribed, reply, Clock::now() + timeout)) {
@@ -88,9 +82,7 @@ void UdpClient::Subscribe(const std::string& camera, const std::vector<proto::Ch
 }
 
 void UdpClient::Step() {
-  Envelope step;
-  step.mutable_step();
-  SendEnvelope(step);
+  SendEnvelope(detail::StepRequest());
 }
 
 bool UdpClient::ReceiveFrame(proto::Frame& frame, Duration timeout) {
@@ -102,25 +94,11 @@ bool UdpClient::ReceiveFrame(proto::Frame& frame, Duration timeout) {
 }
 
 void UdpClient::SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence) {
-  Envelope envelope;
-  proto::TrackerOutput& output = *envelope.mutable_tracker_output();
-  output.set_frame_id(frame_id);
-  output.mutable_box()->set_x(x);
-  output.mutable_box()->set_y(y);
-  output.mutable_box()->set_width(width);
-  output.mutable_box()->set_height(height);
-  output.set_confidence(confidence);
-  SendEnvelope(envelope);
+  SendEnvelope(detail::TrackerOutputRequest(frame_id, x, y, width, height, confidence));
 }
 
 void UdpClient::SendControls(uint32_t entity_id, float steering, float throttle, float brake) {
-  Envelope envelope;
-  proto::Controls& controls = *envelope.mutable_controls();
-  controls.set_entity_id(entity_id);
-  controls.set_steering(steering);
-  controls.set_throttle(throttle);
-  controls.set_brake(brake);
-  SendEnvelope(envelope);
+  SendEnvelope(detail::ControlsRequest(entity_id, steering, throttle, brake));
 }
 
 proto::State UdpClient::GetState(Duration timeout) {
