@@ -62,6 +62,12 @@ Usage: sim4cvd [flags]
   --shm-slots N             frame slots in the shared-memory ring (default 8)
   --shm-expiry-ms N         a shared-memory client silent this long is disconnected (default 5000)
   --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
+  --log FILE                record every frame (poses, tracker and ground-truth boxes, car controls)
+                            to the run log FILE (docs/logs.md; extension .s4log by convention)
+  --log-label TEXT          what the run is, e.g. the tracker's name, for the log's header (default:
+                            the scene name)
+  --replay FILE             the car and the UAV follow the poses of the run log FILE frame by frame
+                            instead of physics, then hold the last pose; same scene and --frame-hz
   --help                    this text
 
 When ready it prints one line on stdout, e.g. `sim4cvd listening tcp=PORT udp=PORT shm=/NAME`
@@ -114,6 +120,9 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
                              f << " is '" << v << "'; use debug, info, warning or error");
          config.log_level = v;
        }},
+      {"--log", [&](auto&, auto& v) { config.log_file = v; }},
+      {"--log-label", [&](auto&, auto& v) { config.log_label = v; }},
+      {"--replay", [&](auto&, auto& v) { config.replay_file = v; }},
   };
   for (std::size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--help" || args[i] == "-h") {
@@ -128,6 +137,10 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   }
   SIM4CV_THROW_UNLESS(config.scene_file.empty() || config.map_file.empty(),
                       "--scene and --map both given; pick one");
+  SIM4CV_THROW_UNLESS(config.log_label.empty() || !config.log_file.empty(), "--log-label needs --log FILE");
+  // The writer truncates its file before replay could read it.
+  SIM4CV_THROW_UNLESS(config.log_file.empty() || config.log_file != config.replay_file,
+                      "--log and --replay both name '" << config.log_file << "'; recording would erase the replayed log");
   const double ratio = config.physics_hz / config.frame_hz;
   SIM4CV_THROW_UNLESS(std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1,
                       "--physics-hz " << config.physics_hz << " must be a whole multiple of --frame-hz " << config.frame_hz);

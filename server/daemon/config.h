@@ -34,6 +34,11 @@ struct Config {
   uint32_t shm_slots = 8;
   uint32_t shm_expiry_ms = 5000;  // a silent shared-memory client is disconnected after this
   std::string log_level = "info";
+  // Run logs (docs/logs.md): record every frame to log_file; replay_file makes
+  // the car and the UAV follow a recorded log's poses instead of physics.
+  std::string log_file;     // empty: no run log
+  std::string log_label;    // the log header's label; empty: the scene name
+  std::string replay_file;  // empty: simulate
 
   // Physics steps per frame; physics_hz must be a whole multiple of frame_hz.
   uint32_t substeps_per_frame() const;

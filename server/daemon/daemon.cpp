@@ -57,6 +57,7 @@ int RunDaemon(const Config& config) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   signal(SIGPIPE, SIG_IGN);  // a client that vanishes must not kill the daemon
+  signal(SIGXFSZ, SIG_IGN);  // a run log over the file size limit is a write error, not death
 
   const sim::Scene scene =
       !config.map_file.empty()
@@ -90,7 +91,7 @@ int RunDaemon(const Config& config) {
   session::Counters counters;
   const session::ServerContext context{scene,        config.mode,     MakeWelcome(config, scene, transports), commands,
                                        latest_state, config.max_message_bytes, counters};
-  SimThread sim(config, scene, commands, latest_state);
+  SimThread sim(config, scene, commands, latest_state, counters);
   sim.Start();
   for (auto& t : transports) t->Start(context);
 

@@ -8,6 +8,7 @@
 #include "server/common/log.h"
 #include "server/daemon/state_message.h"
 #include "server/render/gl_context.h"
+#include "server/render/projection.h"
 #include "server/render/renderer.h"
 #include "server/render/scene_graphics.h"
 
@@ -28,9 +29,14 @@ struct Overloaded : Handlers... {
 }  // namespace
 
 SimThread::SimThread(const Config& config, const sim::Scene& scene, session::CommandQueue& commands,
-                     session::LatestState& latest_state)
+                     session::LatestState& latest_state, session::Counters& counters)
     : config_(config), scene_(scene), commands_(commands), latest_state_(latest_state), world_(scene),
       state_(world_.InitialState()) {
+  if (!config.replay_file.empty()) world_.SetReplay(LoadReplayTrack(config, scene));
+  if (!config.log_file.empty()) {
+    logger_ = std::make_unique<RunLogger>(config, scene, counters);
+    scheduler_.SetObserver(logger_.get());
+  }
   PublishState();  // GetState before the first step sees frame 0
 }
 
@@ -80,6 +86,7 @@ void SimThread::Stop() {
   running_ = false;
   commands_.Wake();
   if (thread_.joinable()) thread_.join();
+  if (logger_) logger_->Close();
 }
 
 void SimThread::Run() {
@@ -159,6 +166,10 @@ void SimThread::AdvanceFrame() {
   for (uint32_t camera = 0; camera < scene_.cameras.size(); ++camera) {
     if (scheduler_.CameraWanted(camera)) RenderCamera(camera);
   }
+  if (logger_) {
+    logger_->Append(state_, scheduler_);
+    scheduler_.ReleaseFrames();  // only now, with the record written, may clients see the frames
+  }
 }
 
 void SimThread::RenderCamera(uint32_t camera_index) {
@@ -178,10 +189,16 @@ void SimThread::RenderCamera(uint32_t camera_index) {
 
   auto& labelled = graphics_->labelled_objects();
   for (const auto& object : labelled) unoccluded_pixels_[object.instance] = 0;
-  renderer_->Render(graphics_->CameraAt(camera_index, state_), graphics_->DrawItems(state_),
-                    {frame->rgb.data(), frame->depth.data(), frame->mask.data()}, unoccluded_pixels_);
+  const render::CameraView view = graphics_->CameraAt(camera_index, state_);
+  renderer_->Render(view, graphics_->DrawItems(state_), {frame->rgb.data(), frame->depth.data(), frame->mask.data()},
+                    unoccluded_pixels_);
   for (auto& object : labelled) object.unoccluded_pixels = unoccluded_pixels_[object.instance];
   boxes_.Extract(frame->mask.data(), spec.width, spec.height, labelled, frame->boxes);
+  // 3D ground truth from the very view that was rendered, so it matches the pixels.
+  const render::BoxProjector camera(view);
+  frame->intrinsics = camera.intrinsics();
+  frame->camera_pose = render::OpenCvPoseOf(view);
+  graphics_->catalog().Fill(state_, camera, frame->boxes, frame->objects);
   FillStateMessage(scene_, state_, frame->state);
   frame->render_end_mono_ns = MonotonicNanoseconds();
   scheduler_.Deliver(ref);

@@ -1,6 +1,7 @@
 // The one thread that touches Bullet and OpenGL. Per step it drains the
 // command queue, advances physics by a frame's worth of substeps, renders
-// every camera someone subscribed to, and hands the frames to the scheduler.
+// every camera someone subscribed to, hands the frames to the scheduler and,
+// with --log, appends the frame's run-log record.
 #pragma once
 
 #include <atomic>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "server/daemon/config.h"
+#include "server/daemon/run_logger.h"
 #include "server/render/ground_truth.h"
 #include "server/session/command_queue.h"
 #include "server/session/scheduler.h"
@@ -26,14 +28,16 @@ namespace sim4cv::daemon {
 
 class SimThread {
  public:
+  // With config.replay_file, loads the replayed log; with config.log_file,
+  // creates the run log. Throws naming the file if either cannot be.
   SimThread(const Config& config, const sim::Scene& scene, session::CommandQueue& commands,
-            session::LatestState& latest_state);
+            session::LatestState& latest_state, session::Counters& counters);
   ~SimThread();
 
   // Starts the thread and waits until its GL context and renderer exist;
   // rethrows what went wrong there.
   void Start();
-  // Finishes the current step and joins.
+  // Finishes the current step, joins and closes the run log.
   void Stop();
 
   // GL_RENDERER of the context (valid after Start).
@@ -57,6 +61,7 @@ class SimThread {
   session::StatePool state_pool_{4};
   sim::World world_;
   sim::State state_;
+  std::unique_ptr<RunLogger> logger_;  // null without --log; the scheduler's observer
   session::Scheduler scheduler_;
   std::vector<session::Command> drained_;
   std::unique_ptr<render::GlContext> gl_;

@@ -26,28 +26,31 @@ Eigen::Vector3f BuildingColour(std::size_t index) {
 }  // namespace
 
 SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
-  auto add_static = [&](Mesh mesh, InstanceId instance, const Eigen::Matrix4f& pose) {
+  auto add_static = [&](Mesh mesh, InstanceId instance, uint32_t object_class, const Eigen::Matrix4f& pose) {
+    if (instance != kUnlabelled) {
+      labelled_.push_back({instance, object_class, 0});
+      catalog_.AddStatic(instance, object_class, mesh, pose);
+    }
     meshes_.push_back(std::move(mesh));
     items_.push_back({static_cast<MeshId>(meshes_.size() - 1), pose, instance});
   };
   if (scene.map) {
     // Tile maps bring their own ground, roads and labelled dressing.
     for (auto& drawable : BuildMapDrawables(*scene.map, *scene.road_graph, static_cast<InstanceId>(sim::kFirstBuildingId))) {
-      add_static(std::move(drawable.mesh), drawable.instance, drawable.world_from_model);
-      if (drawable.instance != kUnlabelled) labelled_.push_back({drawable.instance, drawable.object_class, 0});
+      add_static(std::move(drawable.mesh), drawable.instance, drawable.object_class, drawable.world_from_model);
     }
   } else {
-    add_static(MakeGroundPlane(scene.ground_half_size, {0.55f, 0.50f, 0.40f}), kUnlabelled, Eigen::Matrix4f::Identity());
-    add_static(MakeRoadLoop(scene.road_loop, scene.lane_width, {0.22f, 0.22f, 0.24f}, {0.95f, 0.95f, 0.92f}), kUnlabelled,
+    add_static(MakeGroundPlane(scene.ground_half_size, {0.55f, 0.50f, 0.40f}), kUnlabelled, 0,
                Eigen::Matrix4f::Identity());
+    add_static(MakeRoadLoop(scene.road_loop, scene.lane_width, {0.22f, 0.22f, 0.24f}, {0.95f, 0.95f, 0.92f}), kUnlabelled,
+               0, Eigen::Matrix4f::Identity());
   }
   for (std::size_t i = 0; i < scene.buildings.size(); ++i) {
     const auto& b = scene.buildings[i];
     const Eigen::Vector3f half(b.half_size.x(), b.half_size.y(), b.height / 2.0f);
     const Eigen::Quaternionf yaw(Eigen::AngleAxisf(b.yaw_deg * std::numbers::pi_v<float> / 180.0f, Eigen::Vector3f::UnitZ()));
-    add_static(MakeBox(half, BuildingColour(i)), static_cast<InstanceId>(b.id),
+    add_static(MakeBox(half, BuildingColour(i)), static_cast<InstanceId>(b.id), proto::OBJECT_CLASS_BUILDING,
                PoseMatrix(Eigen::Vector3f(b.centre.x(), b.centre.y(), half.z()), yaw));
-    labelled_.push_back({static_cast<InstanceId>(b.id), proto::OBJECT_CLASS_BUILDING, 0});
   }
   static_item_count_ = items_.size();
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();
@@ -57,6 +60,11 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   uav_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   labelled_.insert(labelled_.begin(), {{static_cast<InstanceId>(sim::kCarEntityId), proto::OBJECT_CLASS_CAR, 0},
                                        {static_cast<InstanceId>(sim::kUavEntityId), proto::OBJECT_CLASS_UAV, 0}});
+  // The physics boxes, which the car's and the UAV's meshes fit inside.
+  catalog_.AddBody(static_cast<InstanceId>(sim::kCarEntityId), proto::OBJECT_CLASS_CAR, ObjectCatalog::Source::kCar,
+                   scene.car.params.chassis_half_extents);
+  catalog_.AddBody(static_cast<InstanceId>(sim::kUavEntityId), proto::OBJECT_CLASS_UAV, ObjectCatalog::Source::kUav,
+                   scene.uav.params.half_extents);
   for (const auto& object : labelled_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
   items_.resize(static_item_count_ + 2);
 }

@@ -1,12 +1,13 @@
 // Turns the simulation's Scene and State into what the Renderer draws: the
-// meshes (built once), the static draw items, and per frame the moving
-// bodies' items and each camera's view.
+// meshes (built once), the static draw items, the labelled objects' 3D
+// ground truth, and per frame the moving bodies' items and each camera's view.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "server/render/ground_truth.h"
+#include "server/render/object_catalog.h"
 #include "server/render/render_types.h"
 #include "server/sim/scene.h"
 #include "server/sim/state.h"
@@ -27,6 +28,9 @@ class SceneGraphics {
   // fills in their unoccluded pixel counts.
   std::vector<LabelledObject>& labelled_objects() { return labelled_; }
 
+  // Class, pose and 3D box of every labelled object (built once).
+  const ObjectCatalog& catalog() const { return catalog_; }
+
   // The view of scene camera `camera_index` at `state`.
   CameraView CameraAt(std::size_t camera_index, const sim::State& state) const;
 
@@ -40,6 +44,7 @@ class SceneGraphics {
   std::size_t static_item_count_ = 0;
   MeshId car_mesh_ = 0, uav_mesh_ = 0;
   std::vector<LabelledObject> labelled_;
+  ObjectCatalog catalog_;
   std::size_t instance_id_bound_ = 0;
 };
 

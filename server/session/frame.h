@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "server/render/ground_truth.h"
+#include "server/render/object_catalog.h"
+#include "server/render/projection.h"
 #include "server/session/ref_pool.h"
 #include "sim4cv.pb.h"
 
@@ -20,6 +22,9 @@ struct Frame {
   std::vector<float> depth;     // width*height, metres
   std::vector<uint16_t> mask;   // width*height instance ids
   std::vector<render::GroundTruthBox> boxes;
+  render::CameraIntrinsics intrinsics;
+  render::Pose camera_pose;  // OpenCV axes (x right, y down, z forward) -> world
+  std::vector<render::ObjectGroundTruth> objects;  // ordered by instance id (ObjectCatalog::Fill)
   int64_t render_end_mono_ns = 0;
   proto::State state;  // entity poses at this frame (reused message)
 };

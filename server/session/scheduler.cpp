@@ -53,7 +53,28 @@ bool Scheduler::CameraWanted(uint32_t camera_index) const {
                      [&](const Subscription& s) { return s.camera_index == camera_index; });
 }
 
-void Scheduler::Deliver(const FrameRef& frame) const {
+std::optional<uint32_t> Scheduler::CameraOf(ClientId client) const {
+  for (const auto& s : subscriptions_) {
+    if (s.client == client) return s.camera_index;
+  }
+  return std::nullopt;
+}
+
+void Scheduler::Deliver(const FrameRef& frame) {
+  if (!observer_) {
+    OfferToSubscribers(frame);
+    return;
+  }
+  observer_->OfferFrame(frame);
+  held_.push_back(frame);
+}
+
+void Scheduler::ReleaseFrames() {
+  for (const FrameRef& frame : held_) OfferToSubscribers(frame);
+  held_.clear();
+}
+
+void Scheduler::OfferToSubscribers(const FrameRef& frame) const {
   for (const auto& s : subscriptions_) {
     // A null link (a subscriber fed some other way, e.g. the shared-memory ring) only steps.
     if (s.camera_index == frame->camera_index && s.link) s.link->OfferFrame(frame);

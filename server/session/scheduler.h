@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "server/session/command.h"
@@ -27,8 +28,19 @@ class Scheduler {
 
   // Whether anyone wants frames of this camera.
   bool CameraWanted(uint32_t camera_index) const;
-  // Hands `frame` to every subscriber of its camera, in client-id order.
-  void Deliver(const FrameRef& frame) const;
+  // The camera `client` is subscribed to, if any.
+  std::optional<uint32_t> CameraOf(ClientId client) const;
+  // Hands `frame` to every subscriber of its camera, in client-id order; with
+  // an observer, to the observer at once and to subscribers at ReleaseFrames.
+  void Deliver(const FrameRef& frame);
+
+  // The run logger sees every rendered frame (it subscribes to no camera, so
+  // it neither makes one wanted nor steps). While it is set, subscribers get
+  // a simulation frame's camera frames only at ReleaseFrames(), after the
+  // frame's log record is written: no client can hold a frame that a crash
+  // could leave out of the log. nullptr removes it.
+  void SetObserver(ClientLink* observer) { observer_ = observer; }
+  void ReleaseFrames();
 
   std::size_t subscriber_count() const { return subscriptions_.size(); }
 
@@ -41,7 +53,11 @@ class Scheduler {
     std::shared_ptr<ClientLink> link;
   };
   Subscription* Find(ClientId client);
+  void OfferToSubscribers(const FrameRef& frame) const;
+
   std::vector<Subscription> subscriptions_;  // ordered by client id
+  ClientLink* observer_ = nullptr;
+  std::vector<FrameRef> held_;  // frames awaiting ReleaseFrames; keeps its capacity
 };
 
 }  // namespace sim4cv::session

@@ -7,6 +7,7 @@
 
 #include "server/common/check.h"
 #include "server/sim/controllers.h"
+#include "server/sim/log/replay_track.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/car_driver.h"
 #include "server/sim/vehicles/quadcopter.h"
@@ -19,6 +20,16 @@ void CopyState(const vehicles::VehicleState& in, BodyState& out) {
   out.orientation = in.orientation;
   out.linear_velocity = in.linear_velocity;
   out.angular_velocity = in.angular_velocity;
+}
+
+// A replayed body takes its logged state, or stays where it is, at rest.
+void Follow(const BodyState* logged, BodyState& body) {
+  if (logged) {
+    body = *logged;
+  } else {
+    body.linear_velocity.setZero();
+    body.angular_velocity.setZero();
+  }
 }
 
 }  // namespace
@@ -91,8 +102,28 @@ World::~World() = default;
 
 State World::InitialState() const { return initial_state_; }
 
+void World::SetReplay(std::shared_ptr<const runlog::ReplayTrack> track) { replay_ = std::move(track); }
+
 void World::Step(State& state, double dt) {
   SIM4CV_DEMAND(dt > 0);
+  if (replay_) {
+    FollowReplay(state);
+  } else {
+    StepPhysics(state, dt);
+  }
+  ++state.physics_steps;
+  state.sim_time = static_cast<double>(state.physics_steps) * dt;
+}
+
+void World::FollowReplay(State& state) const {
+  // Every substep of a frame looks up the same pose; the frame id is counted
+  // by the caller after the frame's last substep.
+  const uint64_t frame_id = state.frame_id + 1;
+  Follow(replay_->Find(frame_id, kCarEntityId), state.car);
+  Follow(replay_->Find(frame_id, kUavEntityId), state.uav);
+}
+
+void World::StepPhysics(State& state, double dt) {
   auto& b = *bodies_;
   vehicles::CarControls controls;
   if (state.car_command.manual) {
@@ -118,8 +149,6 @@ void World::Step(State& state, double dt) {
   b.world.stepSimulation(dt, 0);
   CopyState(b.car->State(), state.car);
   CopyState(b.uav->State(), state.uav);
-  ++state.physics_steps;
-  state.sim_time = static_cast<double>(state.physics_steps) * dt;
 }
 
 }  // namespace sim4cv::sim

@@ -14,6 +14,10 @@
 #include "server/sim/scene.h"
 #include "server/sim/state.h"
 
+namespace sim4cv::runlog {
+class ReplayTrack;
+}
+
 namespace sim4cv::sim {
 
 class World {
@@ -30,16 +34,27 @@ class World {
   // Advances `state` by one physics step of `dt` seconds. Deterministic.
   void Step(State& state, double dt);
 
+  // Replay (docs/logs.md): from now on Step moves no body by physics; it
+  // copies into State the car's and the UAV's logged poses and velocities of
+  // the frame being stepped to (state.frame_id + 1). A frame the log does not
+  // hold (past its end, or a gap) keeps the previous pose at rest. Bullet is
+  // not stepped: nothing else in the world moves, and rendering reads State.
+  void SetReplay(std::shared_ptr<const runlog::ReplayTrack> track);
+
   // The lane the car's waypoint follower drives (right lane of the road loop).
   const ClosedPath& car_lane() const { return car_lane_; }
 
  private:
   struct Bodies;
 
+  void StepPhysics(State& state, double dt);
+  void FollowReplay(State& state) const;
+
   const Scene& scene_;
   ClosedPath car_lane_;
   std::unique_ptr<Bodies> bodies_;
   State initial_state_;  // taken when the bodies were spawned
+  std::shared_ptr<const runlog::ReplayTrack> replay_;
 };
 
 }  // namespace sim4cv::sim

@@ -3,6 +3,8 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/wire_format_lite.h>
 
+#include <algorithm>
+
 #include "protocol/framing.h"
 #include "server/common/check.h"
 
@@ -49,9 +51,49 @@ void FillImageHeader(const PixelChannel& pixels, uint32_t width, proto::Image& i
   image.set_stride(width * pixels.bytes_per_pixel);
 }
 
+void SetVec3(const Eigen::Vector3d& v, proto::Vec3& out) {
+  out.set_x(v.x());
+  out.set_y(v.y());
+  out.set_z(v.z());
+}
+
+void SetQuaternion(const Eigen::Quaterniond& q, proto::Quaternion& out) {
+  out.set_w(q.w());
+  out.set_x(q.x());
+  out.set_y(q.y());
+  out.set_z(q.z());
+}
+
+void FillCamera(const render::CameraIntrinsics& intrinsics, const render::Pose& pose, proto::Frame& meta) {
+  proto::CameraIntrinsics& out = *meta.mutable_camera_intrinsics();
+  out.set_fx(intrinsics.fx);
+  out.set_fy(intrinsics.fy);
+  out.set_cx(intrinsics.cx);
+  out.set_cy(intrinsics.cy);
+  out.set_width(intrinsics.width);
+  out.set_height(intrinsics.height);
+  SetVec3(pose.position, *meta.mutable_camera_pose()->mutable_position());
+  SetQuaternion(pose.orientation, *meta.mutable_camera_pose()->mutable_orientation());
+}
+
+void FillObject(const render::ObjectGroundTruth& object, proto::ObjectGroundTruth& out) {
+  out.set_object_id(object.instance);
+  out.set_object_class(static_cast<proto::ObjectClass>(object.object_class));
+  SetVec3(object.position, *out.mutable_position());
+  SetQuaternion(object.orientation, *out.mutable_orientation());
+  SetVec3(object.linear_velocity, *out.mutable_linear_velocity());
+  SetVec3(object.angular_velocity, *out.mutable_angular_velocity());
+  SetVec3(object.half_extents, *out.mutable_half_extents());
+  proto::ImageBox& box = *out.mutable_projected_box();
+  box.set_x(object.projected_box.x);
+  box.set_y(object.projected_box.y);
+  box.set_width(object.projected_box.width);
+  box.set_height(object.projected_box.height);
+  out.set_has_visible_box(object.has_visible_box);
+}
+
 void FillMeta(const session::Frame& frame, const std::string& camera_name, bool with_boxes, bool with_state,
               uint64_t dropped, proto::Frame& meta) {
-  meta.Clear();  // keeps the repeated boxes' allocations for reuse
   meta.set_frame_id(frame.frame_id);
   meta.set_sim_time(frame.sim_time);
   meta.set_camera(camera_name);
@@ -72,19 +114,42 @@ void FillMeta(const session::Frame& frame, const std::string& camera_name, bool 
     out->set_visibility(box.visibility);
     out->set_visible_pixels(box.visible_pixels);
   }
+  FillCamera(frame.intrinsics, frame.camera_pose, meta);
+  for (const auto& object : frame.objects) FillObject(object, *meta.add_objects());
 }
 
+// A small frame's meta (no objects, a short State) fits well inside.
+constexpr std::size_t kFirstArenaBlockBytes = 16 * 1024;
+
 }  // namespace
+
+proto::Frame& FrameEncoder::FreshMeta() {
+  if (arena_ && arena_->SpaceAllocated() <= arena_block_.size()) {
+    arena_->Reset();  // keeps the block we own
+  } else {
+    // The last frame overflowed into blocks of the arena's own: start over
+    // with one block large enough (this allocates only while frames grow).
+    const std::size_t needed = arena_ ? 2 * static_cast<std::size_t>(arena_->SpaceAllocated()) : kFirstArenaBlockBytes;
+    arena_.reset();
+    arena_block_.resize(std::max(needed, arena_block_.size()));
+    google::protobuf::ArenaOptions options;
+    options.initial_block = arena_block_.data();
+    options.initial_block_size = arena_block_.size();
+    arena_.emplace(options);
+  }
+  return *google::protobuf::Arena::CreateMessage<proto::Frame>(&*arena_);
+}
 
 void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera_name,
                           const proto::Subscribed& subscription, bool with_state, uint64_t dropped, bool length_prefix) {
   bool with_boxes = false;
   for (int channel : subscription.channels()) with_boxes = with_boxes || channel == proto::CHANNEL_BOXES;
-  FillMeta(frame, camera_name, with_boxes, with_state, dropped, meta_);
+  proto::Frame& meta = FreshMeta();
+  FillMeta(frame, camera_name, with_boxes, with_state, dropped, meta);
 
   // Pass 1: sizes, since each length-delimited field is preceded by its size.
   const std::size_t pixel_count = static_cast<std::size_t>(frame.width) * frame.height;
-  std::size_t frame_body = meta_.ByteSizeLong();
+  std::size_t frame_body = meta.ByteSizeLong();
   std::array<std::size_t, 4> image_header_size{};
   std::array<std::size_t, 4> image_data_size{};
   std::array<PixelChannel, 4> pixel_channels{};
@@ -113,7 +178,7 @@ void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera
   }
   AppendVarint(headers_, kEnvelopeFrameTag);
   AppendVarint(headers_, static_cast<uint32_t>(frame_body));
-  meta_.AppendToString(&headers_);
+  meta.AppendToString(&headers_);
   std::array<std::size_t, 4> header_end{};
   for (std::size_t i = 0; i < image_count; ++i) {
     FillImageHeader(pixel_channels[i], frame.width, image_);

@@ -6,11 +6,15 @@
 // protobuf and each Image's `data` field is framed by hand around it.
 #pragma once
 
+#include <google/protobuf/arena.h>
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "server/session/frame.h"
 #include "sim4cv.pb.h"
@@ -33,7 +37,14 @@ class FrameEncoder {
   std::size_t total_size() const { return total_size_; }
 
  private:
-  proto::Frame meta_;   // reused: everything but the pixels
+  // An empty Frame on the arena, which is reset for it.
+  proto::Frame& FreshMeta();
+
+  // Clearing a heap message frees its sub-messages (the objects' positions,
+  // the State), so the per-frame message lives on an arena instead, whose one
+  // block grows to the largest frame seen: once warm, encoding allocates nothing.
+  std::vector<char> arena_block_;
+  std::optional<google::protobuf::Arena> arena_;
   proto::Image image_;  // reused: one image's header fields
   std::string headers_;  // every non-pixel byte, in wire order
   std::array<Segment, 8> segments_{};

@@ -101,6 +101,19 @@ TEST(ConfigTest, ManyFlagsTogetherAndTheLastWins) {
   EXPECT_EQ(config.substeps_per_frame(), 4u);
 }
 
+TEST(ConfigTest, RunLogFlags) {
+  const Config defaults = Parse({});
+  EXPECT_EQ(defaults.log_file, "");
+  EXPECT_EQ(defaults.log_label, "");
+  EXPECT_EQ(defaults.replay_file, "");
+  const Config config = Parse({"--log", "/tmp/run.s4log", "--log-label", "KCF tracker", "--replay", "/tmp/old.s4log"});
+  EXPECT_EQ(config.log_file, "/tmp/run.s4log");
+  EXPECT_EQ(config.log_label, "KCF tracker");
+  EXPECT_EQ(config.replay_file, "/tmp/old.s4log");
+  ExpectMentions(ParseError({"--log-label", "x"}), {"--log-label", "--log"});
+  ExpectMentions(ParseError({"--log", "a.s4log", "--replay", "a.s4log"}), {"--log", "--replay", "'a.s4log'"});
+}
+
 TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
   for (const char* flag : {"--help", "-h"}) {
     std::string help;
@@ -108,7 +121,8 @@ TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
     EXPECT_FALSE(config.has_value());
     ExpectMentions(help, {"--scene", "--seed", "--bind", "--tcp-port", "--physics-hz", "--frame-hz", "--width",
                           "--height", "--mode", "--max-message-bytes", "--max-clients", "--tcp-send-buffer", "--udp-port", "--udp-datagram-bytes",
-                          "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--log-level", "--help",
+                          "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--log-level", "--log ", "--log-label",
+                          "--replay", "--help",
                           "lockstep", "realtime"});
     EXPECT_EQ(help, HelpText());
   }

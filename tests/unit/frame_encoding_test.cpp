@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "protocol/framing.h"
+#include "tests/support/allocation_counter.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::transport {
@@ -60,6 +61,15 @@ class FrameEncodingTest : public ::testing::Test {
     building.visible_pixels = width;
     building.visibility = 1.0f;
     f.boxes = {car, building};
+    f.intrinsics = {155.5, 155.25, 160.0, 90.0, width, height};
+    f.camera_pose.position = {1.5, -2.0, 16.0};
+    f.camera_pose.orientation = Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5);
+    const Eigen::Vector3d at_rest = Eigen::Vector3d::Zero();
+    f.objects = {{1, proto::OBJECT_CLASS_CAR, {10.0, 20.0, 0.75}, {0.0, 0.0, 0.0, 1.0}, {-6.0, 0.25, 0.0},
+                  {0.0, 0.0, 0.125}, {2.25, 0.9, 0.6}, {0.5f, 1.5f, 3.25f, 2.75f}, true},
+                 // In view but occluded: no Box.
+                 {102, proto::OBJECT_CLASS_BUILDING, {-20.0, 5.0, 3.5}, {1.0, 0.0, 0.0, 0.0}, at_rest, at_rest,
+                  {5.0, 4.0, 3.5}, {0.0f, 0.0f, 2.0f, 1.0f}, false}};
     f.state.Clear();
     f.state.set_frame_id(f.frame_id);
     f.state.set_sim_time(f.sim_time);
@@ -164,6 +174,56 @@ class FrameEncodingTest : public ::testing::Test {
     EXPECT_EQ(f.boxes(1).object_id(), 101u);
     EXPECT_EQ(f.boxes(1).object_class(), proto::OBJECT_CLASS_BUILDING);
     EXPECT_EQ(f.boxes(1).width(), kWidth);
+    ExpectGroundTruth3d(f);
+  }
+
+  static void ExpectVec3(const proto::Vec3& sent, const Eigen::Vector3d& v) {
+    EXPECT_EQ(Eigen::Vector3d(sent.x(), sent.y(), sent.z()), v);
+  }
+
+  static void ExpectQuaternion(const proto::Quaternion& sent, const Eigen::Quaterniond& q) {
+    EXPECT_EQ(Eigen::Vector4d(sent.x(), sent.y(), sent.z(), sent.w()), q.coeffs());
+  }
+
+  // The camera model and the objects, exactly as in the frame.
+  void ExpectGroundTruth3d(const proto::Frame& f) const {
+    const render::CameraIntrinsics& k = frame_->intrinsics;
+    ASSERT_TRUE(f.has_camera_intrinsics());
+    EXPECT_EQ(f.camera_intrinsics().fx(), k.fx);
+    EXPECT_EQ(f.camera_intrinsics().fy(), k.fy);
+    EXPECT_EQ(f.camera_intrinsics().cx(), k.cx);
+    EXPECT_EQ(f.camera_intrinsics().cy(), k.cy);
+    EXPECT_EQ(f.camera_intrinsics().width(), k.width);
+    EXPECT_EQ(f.camera_intrinsics().height(), k.height);
+    ASSERT_TRUE(f.has_camera_pose());
+    ExpectVec3(f.camera_pose().position(), frame_->camera_pose.position);
+    ExpectQuaternion(f.camera_pose().orientation(), frame_->camera_pose.orientation);
+    ASSERT_EQ(f.objects_size(), 2);
+    for (int i = 0; i < f.objects_size(); ++i) {
+      const proto::ObjectGroundTruth& sent = f.objects(i);
+      const render::ObjectGroundTruth& object = frame_->objects[i];
+      EXPECT_EQ(sent.object_id(), object.instance);
+      EXPECT_EQ(sent.object_class(), static_cast<proto::ObjectClass>(object.object_class));
+      ExpectVec3(sent.position(), object.position);
+      ExpectQuaternion(sent.orientation(), object.orientation);
+      ExpectVec3(sent.linear_velocity(), object.linear_velocity);
+      ExpectVec3(sent.angular_velocity(), object.angular_velocity);
+      ExpectVec3(sent.half_extents(), object.half_extents);
+      EXPECT_EQ(sent.projected_box().x(), object.projected_box.x);
+      EXPECT_EQ(sent.projected_box().y(), object.projected_box.y);
+      EXPECT_EQ(sent.projected_box().width(), object.projected_box.width);
+      EXPECT_EQ(sent.projected_box().height(), object.projected_box.height);
+      EXPECT_EQ(sent.has_visible_box(), object.has_visible_box);
+    }
+    EXPECT_FALSE(f.objects(1).has_visible_box());
+    EXPECT_TRUE(f.objects(1).has_linear_velocity()) << "zero velocities are sent, not left out";
+  }
+
+  static void ExpectNoGroundTruth(const proto::Frame& f) {
+    EXPECT_EQ(f.boxes_size(), 0);
+    EXPECT_EQ(f.objects_size(), 0);
+    EXPECT_FALSE(f.has_camera_intrinsics());
+    EXPECT_FALSE(f.has_camera_pose());
   }
 
   void ExpectState(const proto::Frame& f) const {
@@ -211,7 +271,7 @@ TEST_F(FrameEncodingTest, RgbOnly) {
     ExpectMeta(f, 0);
     ASSERT_EQ(f.images_size(), 1);
     ExpectImage(f.images(0), proto::CHANNEL_RGB);
-    EXPECT_EQ(f.boxes_size(), 0);
+    ExpectNoGroundTruth(f);
     EXPECT_FALSE(f.has_state());
     ExpectZeroCopy({proto::CHANNEL_RGB});
   }
@@ -260,6 +320,26 @@ TEST_F(FrameEncodingTest, BoxesBetweenPixelChannelsAndStateOnlyWhenAsked) {
   ExpectZeroCopy({proto::CHANNEL_DEPTH, proto::CHANNEL_RGB});
 }
 
+TEST_F(FrameEncodingTest, CameraAndObjectsTravelOnlyWithBoxes) {
+  const proto::Envelope without =
+      EncodeAndParse({proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK}, true, 0, true);
+  ExpectNoGroundTruth(without.frame());
+  const proto::Envelope with = EncodeAndParse({proto::CHANNEL_BOXES}, false, 0, true);
+  ExpectBoxes(with.frame());
+}
+
+TEST_F(FrameEncodingTest, WarmEncoderAllocatesNothing) {
+  const proto::Subscribed everything =
+      Subscription({proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_BOXES});
+  writable_->objects.resize(200, writable_->objects.front());  // as many as a dense map shows
+  for (int warm_up = 0; warm_up < 3; ++warm_up) encoder_.Encode(*frame_, "uav", everything, true, 0, true);
+  EXPECT_EQ(testing::AllocationsIn([&] {
+              for (int frame = 0; frame < 10; ++frame) encoder_.Encode(*frame_, "uav", everything, true, 0, true);
+            }),
+            0u);
+  EXPECT_EQ(Concatenate().size(), encoder_.total_size());
+}
+
 TEST_F(FrameEncodingTest, EncoderReuseCarriesNothingOver) {
   EncodeAndParse({proto::CHANNEL_MASK, proto::CHANNEL_DEPTH, proto::CHANNEL_RGB, proto::CHANNEL_BOXES}, true, 9, true);
   const proto::Envelope envelope = EncodeAndParse({proto::CHANNEL_RGB}, false, 0, false);
@@ -267,7 +347,7 @@ TEST_F(FrameEncodingTest, EncoderReuseCarriesNothingOver) {
   ExpectMeta(f, 0);
   ASSERT_EQ(f.images_size(), 1);
   ExpectImage(f.images(0), proto::CHANNEL_RGB);
-  EXPECT_EQ(f.boxes_size(), 0);
+  ExpectNoGroundTruth(f);
   EXPECT_FALSE(f.has_state());
   ExpectZeroCopy({proto::CHANNEL_RGB});
 }
@@ -292,7 +372,7 @@ TEST_F(FrameEncodingTest, FullSizeFrameWithMultiByteLengths) {
   ExpectImage(f.images(0), proto::CHANNEL_DEPTH);
   ExpectImage(f.images(1), proto::CHANNEL_RGB);
   ExpectImage(f.images(2), proto::CHANNEL_MASK);
-  EXPECT_EQ(f.boxes_size(), 0);
+  ExpectNoGroundTruth(f);
   ExpectState(f);
   ExpectZeroCopy({proto::CHANNEL_DEPTH, proto::CHANNEL_RGB, proto::CHANNEL_MASK});
 }

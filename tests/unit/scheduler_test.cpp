@@ -223,5 +223,26 @@ TEST_F(SchedulerTest, DeliverSharesOneFrameWithoutCopying) {
   EXPECT_EQ(again, a->addresses[0]);
 }
 
+TEST_F(SchedulerTest, AnObserverSeesFramesFirstAndSubscribersOnlyAtRelease) {
+  auto observer = std::make_shared<RecordingLink>(0, &delivery_log_);
+  auto client = Link(1);
+  scheduler_.SetObserver(observer.get());
+  EXPECT_FALSE(scheduler_.CameraWanted(1)) << "an observer subscribes to nothing";
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, client);
+  EXPECT_EQ(scheduler_.CameraOf(1), 0u);
+  EXPECT_EQ(scheduler_.CameraOf(2), std::nullopt);
+  scheduler_.Deliver(MakeFrame(7, 0));
+  scheduler_.Deliver(MakeFrame(7, 1));  // no subscriber: only the observer sees it
+  EXPECT_EQ(observer->frames, (std::vector<uint64_t>{7, 7}));
+  EXPECT_TRUE(client->frames.empty()) << "held until the log record is written";
+  scheduler_.ReleaseFrames();
+  EXPECT_EQ(client->frames, std::vector<uint64_t>{7});
+  scheduler_.ReleaseFrames();  // nothing held: nothing delivered twice
+  EXPECT_EQ(client->frames, std::vector<uint64_t>{7});
+  scheduler_.SetObserver(nullptr);
+  scheduler_.Deliver(MakeFrame(8, 0));
+  EXPECT_EQ(client->frames, (std::vector<uint64_t>{7, 8}));
+}
+
 }  // namespace
 }  // namespace sim4cv::session

@@ -35,3 +35,5 @@ sim4cv_test(unit replay_track_test sim4cv_runlog)
 sim4cv_test(unit logdraw_test sim4cv_runlog sim4cv_map ${OpenCV_LIBS})
 target_compile_definitions(logdraw_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOURCE_DIR}" SIM4CV_LOGDRAW_PATH="$<TARGET_FILE:sim4cv_logdraw>")
 add_dependencies(logdraw_test sim4cv_logdraw)  # the test runs the tool
+sim4cv_test(unit projection_test sim4cv_render)
+sim4cv_test(unit object_catalog_test sim4cv_daemon)

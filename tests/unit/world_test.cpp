@@ -5,8 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "server/sim/controllers.h"
+#include "server/sim/log/replay_track.h"
+#include "server/sim/log/run_log_writer.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::sim {
@@ -187,6 +193,46 @@ TEST_F(WorldTest, ManualThrottleAcceleratesAndSteeringTurnsRight) {
   EXPECT_LT(ForwardSpeed(state.car), 7.0);
   // Positive steering turns right: clockwise, the yaw decreases.
   EXPECT_LT(WrapAngle(state.car.Yaw() - yaw0), -0.1);
+}
+
+TEST_F(WorldTest, ReplayFollowsTheLoggedPosesAndHoldsWhereTheLogHasNone) {
+  // Record frames 1..20 of a simulated run (8 substeps each) but leave out frame 10.
+  const std::string path = ::testing::TempDir() + "world_replay_test.s4log";
+  std::vector<State> recorded;
+  {
+    World world(scene_);
+    State state = world.InitialState();
+    runlog::RunLogWriter writer(path, {});
+    runlog::FrameLogRecord record;
+    for (uint64_t frame = 1; frame <= 20; ++frame) {
+      for (int i = 0; i < 8; ++i) world.Step(state, kDt);
+      state.frame_id = frame;
+      recorded.push_back(state);
+      if (frame == 10) continue;
+      record.Clear();
+      record.frame_id = frame;
+      record.entities = {{kCarEntityId, state.car}, {kUavEntityId, state.uav}};
+      writer.Append(record);
+    }
+  }
+  World world(scene_);
+  world.SetReplay(std::make_shared<const runlog::ReplayTrack>(runlog::ReplayTrack::Load(path)));
+  State state = world.InitialState();
+  state.car_command = CarCommand{1.0f, 1.0f, 0.0f, true};  // ignored: replayed bodies do not drive
+  for (uint64_t frame = 1; frame <= 25; ++frame) {
+    const BodyState car_before = state.car;
+    for (int i = 0; i < 8; ++i) world.Step(state, kDt);
+    state.frame_id = frame;
+    EXPECT_EQ(state.sim_time, 8.0 * static_cast<double>(frame) * kDt);
+    if (frame == 10 || frame > 20) {  // not in the log: the previous pose, at rest
+      EXPECT_TRUE(state.car.position == car_before.position) << "frame " << frame;
+      EXPECT_TRUE(state.car.linear_velocity.isZero() && state.uav.angular_velocity.isZero()) << "frame " << frame;
+      continue;
+    }
+    ExpectBodiesIdentical(state.car, recorded[frame - 1].car);
+    ExpectBodiesIdentical(state.uav, recorded[frame - 1].uav);
+  }
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -1,0 +1,110 @@
+#include "server/daemon/run_logger.h"
+
+#include <chrono>
+
+#include "server/common/check.h"
+#include "server/common/log.h"
+
+namespace sim4cv::daemon {
+namespace {
+
+runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene) {
+  runlog::RunLogHeader header;
+  header.creator = "sim4cvd " SIM4CV_VERSION;
+  header.label = config.log_label.empty() ? scene.name : config.log_label;
+  header.scene_name = scene.name;
+  header.map_path = config.map_file;
+  header.physics_hz = config.physics_hz;
+  header.frame_hz = config.frame_hz;
+  header.seed = config.seed;
+  header.entities = {{sim::kCarEntityId, scene.car.name, runlog::kEntityKindCar, runlog::kObjectClassCar},
+                     {sim::kUavEntityId, scene.uav.name, runlog::kEntityKindUav, runlog::kObjectClassUav}};
+  for (const auto& camera : scene.cameras) {
+    // Every camera rides the car or the UAV, as SceneGraphics places them.
+    const uint32_t mount = scene.MountedOnCar(camera) ? sim::kCarEntityId : sim::kUavEntityId;
+    header.cameras.push_back({camera.name, mount, camera.width, camera.height});
+  }
+  return header;
+}
+
+}  // namespace
+
+RunLogger::RunLogger(const Config& config, const sim::Scene& scene, session::Counters& counters)
+    : counters_(counters), writer_(std::make_unique<runlog::RunLogWriter>(config.log_file, MakeHeader(config, scene))) {}
+
+void RunLogger::OfferFrame(const session::FrameRef& frame) {
+  for (const render::GroundTruthBox& box : frame->boxes) {
+    if (box.instance != sim::kCarEntityId) continue;
+    record_.ground_truth.push_back({static_cast<uint16_t>(frame->camera_index), box.instance, box.x, box.y, box.width,
+                                    box.height, box.visibility});
+  }
+}
+
+void RunLogger::Append(const sim::State& state, const session::Scheduler& scheduler) {
+  if (writer_) {
+    const auto start = std::chrono::steady_clock::now();
+    record_.frame_id = state.frame_id;
+    record_.sim_time = state.sim_time;
+    record_.entities.push_back({sim::kCarEntityId, state.car});
+    record_.entities.push_back({sim::kUavEntityId, state.uav});
+    // State keeps each client's latest report until it sends another, so a
+    // box recurs in every record until replaced; its frame_id tells them apart.
+    for (const sim::TrackerReport& report : state.tracker_reports) {
+      const std::optional<uint32_t> camera = scheduler.CameraOf(report.client_id);
+      record_.tracker_boxes.push_back({camera ? static_cast<uint16_t>(*camera) : runlog::kNoCamera, report});
+    }
+    record_.controls.push_back({sim::kCarEntityId, state.car_command});
+    try {
+      writer_->Append(record_);
+    } catch (const std::exception& error) {
+      Fail(error);
+    }
+    append_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count();
+  }
+  record_.Clear();
+}
+
+void RunLogger::Close() {
+  if (!writer_) return;
+  const uint64_t records = writer_->records_written();
+  const uint64_t bytes = writer_->bytes_written();
+  const std::string path = writer_->path();
+  try {
+    writer_->Close();
+  } catch (const std::exception& error) {
+    Fail(error);
+    return;
+  }
+  writer_.reset();
+  LOG_INFO("run log " << path << ": " << records << " records, " << bytes << " bytes, "
+                      << (records ? static_cast<double>(append_ns_) / 1e3 / static_cast<double>(records) : 0.0)
+                      << " us per record on the sim thread");
+}
+
+void RunLogger::Fail(const std::exception& error) {
+  // The writer has cut the file back to its last whole record, so the log
+  // stays readable; the simulation must not stop for a full disk.
+  LOG_ERROR(error.what() << "; run logging stopped, the simulation goes on");
+  counters_.Add("log.write_errors");
+  writer_.reset();
+}
+
+std::shared_ptr<const runlog::ReplayTrack> LoadReplayTrack(const Config& config, const sim::Scene& scene) {
+  auto track = std::make_shared<const runlog::ReplayTrack>(runlog::ReplayTrack::Load(config.replay_file));
+  const runlog::RunLogHeader& header = track->header();
+  SIM4CV_THROW_UNLESS(header.scene_name == scene.name, config.replay_file << " was recorded on scene '" << header.scene_name
+                                                                          << "', not '" << scene.name
+                                                                          << "'; start with its --map or --scene");
+  SIM4CV_THROW_UNLESS(header.frame_hz == config.frame_hz, config.replay_file << " was recorded at --frame-hz "
+                                                                             << header.frame_hz << ", not "
+                                                                             << config.frame_hz);
+  if (track->empty()) {
+    LOG_WARNING("replay log " << config.replay_file << " holds no frames; the car and the UAV stay where they start");
+  } else {
+    LOG_INFO("replaying frames " << track->frame_id(0) << ".." << track->frame_id(track->frame_count() - 1) << " of "
+                                 << config.replay_file);
+  }
+  return track;
+}
+
+}  // namespace sim4cv::daemon

@@ -1,0 +1,58 @@
+// The daemon's side of run logs (docs/logs.md): RunLogger writes one record
+// per simulation frame on the sim thread (--log), LoadReplayTrack reads the
+// log that --replay follows.
+#pragma once
+
+#include <cstdint>
+#include <exception>
+#include <memory>
+#include <string>
+
+#include "server/daemon/config.h"
+#include "server/session/client_link.h"
+#include "server/session/counters.h"
+#include "server/session/scheduler.h"
+#include "server/sim/log/replay_track.h"
+#include "server/sim/log/run_log_writer.h"
+#include "server/sim/scene.h"
+#include "server/sim/state.h"
+
+namespace sim4cv::daemon {
+
+// Owned by the sim thread, and the scheduler's observer (Scheduler::SetObserver):
+// it sees every camera frame as it is rendered and keeps the target's
+// ground-truth box; Append then writes the frame's record with one write().
+// A failed write never stops the simulation: it logs one error, counts
+// log.write_errors and stops logging.
+class RunLogger final : public session::ClientLink {
+ public:
+  // Creates (truncates) config.log_file and writes the header. Throws naming
+  // the file if it cannot: that refuses the start, before any frame.
+  RunLogger(const Config& config, const sim::Scene& scene, session::Counters& counters);
+
+  // The ground-truth box of the target (the car) in one rendered camera
+  // frame of the current simulation frame, if the car is visible in it.
+  void OfferFrame(const session::FrameRef& frame) override;
+  // Writes the current frame's record: the poses, every client's latest
+  // tracker box (with the camera it subscribes to), the boxes gathered by
+  // OfferFrame since the last Append, and the car's command.
+  void Append(const sim::State& state, const session::Scheduler& scheduler);
+  // Closes the file and logs what was written and what it cost the sim
+  // thread. Idempotent; the destructor closes too, silently.
+  void Close();
+
+ private:
+  void Fail(const std::exception& error);
+
+  session::Counters& counters_;
+  std::unique_ptr<runlog::RunLogWriter> writer_;  // null once closed or failed
+  runlog::FrameLogRecord record_;                 // reused: no allocation per frame once warm
+  int64_t append_ns_ = 0;                         // time spent in Append, for the closing line
+};
+
+// Reads the whole of config.replay_file. Throws naming the file if it is
+// missing, not a run log or damaged, or was recorded on another scene or at
+// another frame rate (replay goes by frame id).
+std::shared_ptr<const runlog::ReplayTrack> LoadReplayTrack(const Config& config, const sim::Scene& scene);
+
+}  // namespace sim4cv::daemon
