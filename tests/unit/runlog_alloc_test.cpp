@@ -9,39 +9,14 @@
 #include "tests/support/no_warnings.h"
 #include "tests/unit/runlog_test_support.h"
 
-// Counts heap allocations while g_counting is set.
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<std::size_t> g_allocations{0};
-}  // namespace
-
-[[gnu::noinline]] void* operator new(std::size_t size) {
-  if (g_counting) ++g_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-// Not inlined, so that GCC does not see free() meet a pointer from operator new.
-[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete[](void* p) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+#include "tests/support/allocation_counter.h"
 
 namespace sim4cv::runlog {
 namespace {
 
 using namespace testing;
+using sim4cv::testing::AllocationsIn;
 constexpr uint64_t kRecords = 500;
-
-// Counts the allocations `body` makes.
-template <typename Body>
-std::size_t AllocationsIn(const Body& body) {
-  g_allocations = 0;
-  g_counting = true;
-  body();
-  g_counting = false;
-  return g_allocations;
-}
 
 TEST(RunLogAllocations, CounterWorks) {
   EXPECT_EQ(AllocationsIn([] { ::operator delete(::operator new(16)); }), 1u);

@@ -19,24 +19,8 @@
 #include "server/transport/udp/sequence_filter.h"
 #include "tests/support/no_warnings.h"
 
-// Counts heap allocations while g_counting is set, to show that chunking and
-// reassembly allocate nothing once warm.
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<std::size_t> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  if (g_counting) ++g_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-// Not inlined, so that GCC does not see free() meet a pointer from operator new.
-[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete[](void* p) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+// Chunking and reassembly must allocate nothing once warm.
+#include "tests/support/allocation_counter.h"
 
 namespace sim4cv::transport {
 namespace {
@@ -294,14 +278,10 @@ TEST_F(UdpChunkingTest, ChunkingAndReassemblyAllocateNothingOnceWarm) {
     return last;
   };
   ASSERT_EQ(round(1), Result::kComplete);  // warm-up: buffers reach their size
-  g_allocations = 0;
-  g_counting = true;
-  ::operator delete(::operator new(16));  // the counter works
-  ASSERT_EQ(g_allocations.exchange(0), 1u);
-  const Result second = round(2);
-  g_counting = false;
+  ASSERT_EQ(testing::AllocationsIn([] { ::operator delete(::operator new(16)); }), 1u);  // the counter works
+  Result second = Result::kComplete;
+  EXPECT_EQ(testing::AllocationsIn([&] { second = round(2); }), 0u);
   EXPECT_EQ(second, Result::kComplete);
-  EXPECT_EQ(g_allocations.load(), 0u);
 }
 
 TEST(SequenceFilterTest, AppliesOnlyIncreasingSequences) {
