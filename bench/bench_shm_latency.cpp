@@ -35,11 +35,6 @@ using namespace sim4cv;
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
-int64_t MonotonicNanoseconds() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 double ThreadCpuSeconds() {
   rusage usage{};
@@ -82,7 +77,7 @@ void FrameWake(int samples, std::chrono::microseconds spin) {
     for (int i = 1; i <= samples; ++i) {
       std::this_thread::sleep_for(std::chrono::microseconds(gap_us(random)));
       frame.frame_id = static_cast<uint64_t>(i);
-      frame.render_end_mono_ns = MonotonicNanoseconds();
+      frame.render_end_mono_ns = bench::MonotonicNanoseconds();
       writer.Write(frame);
     }
   });
@@ -91,7 +86,7 @@ void FrameWake(int samples, std::chrono::microseconds spin) {
   const auto start = Clock::now();
   for (uint64_t last = 0; last < static_cast<uint64_t>(samples);) {
     if (!client.WaitForFrame(last, 1000ms)) break;
-    const int64_t awake = MonotonicNanoseconds();
+    const int64_t awake = bench::MonotonicNanoseconds();
     FrameView view;
     client.AcquireNewest(view);
     if (view.frame_id() == last + 1) us.push_back(static_cast<double>(awake - view.render_end_mono_ns()) / 1e3);
@@ -188,9 +183,9 @@ void AgainstDaemon(int samples, const std::string& width, const std::string& hei
     shm.Step();
     if (!shm.WaitForFrame(last, 5000ms)) break;
     shm.AcquireNewest(view);
-    view_us.push_back(static_cast<double>(MonotonicNanoseconds() - view.render_end_mono_ns()) / 1e3);
+    view_us.push_back(static_cast<double>(bench::MonotonicNanoseconds() - view.render_end_mono_ns()) / 1e3);
     shm.ReadNewest(frame);
-    copy_us.push_back(static_cast<double>(MonotonicNanoseconds() - frame.render_end_mono_ns) / 1e3);
+    copy_us.push_back(static_cast<double>(bench::MonotonicNanoseconds() - frame.render_end_mono_ns) / 1e3);
     last = frame.frame_id;
     step_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
   }
@@ -211,7 +206,7 @@ void AgainstDaemon(int samples, const std::string& width, const std::string& hei
   for (int i = 0; i < samples / 4; ++i) {
     const auto start = Clock::now();
     const proto::Frame& received = tcp_only.StepAndReceive();
-    copy_us.push_back(static_cast<double>(MonotonicNanoseconds() - received.render_end_mono_ns()) / 1e3);
+    copy_us.push_back(static_cast<double>(bench::MonotonicNanoseconds() - received.render_end_mono_ns()) / 1e3);
     step_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
   }
   Print((label + "render end -> frame received, TCP").c_str(), copy_us);

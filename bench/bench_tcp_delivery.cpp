@@ -15,11 +15,6 @@
 
 namespace {
 
-int64_t MonotonicNanoseconds() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 }  // namespace
 
@@ -48,7 +43,7 @@ int main(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   for (int i = 0; i < frames; ++i) {
     const proto::Frame& frame = client.StepAndReceive();
-    latency_us.push_back(static_cast<double>(MonotonicNanoseconds() - frame.render_end_mono_ns()) / 1e3);
+    latency_us.push_back(static_cast<double>(bench::MonotonicNanoseconds() - frame.render_end_mono_ns()) / 1e3);
     for (const auto& image : frame.images()) bytes += image.data().size();
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

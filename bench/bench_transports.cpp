@@ -27,11 +27,6 @@ namespace {
 using namespace sim4cv;
 using Clock = std::chrono::steady_clock;
 
-int64_t NowNs() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 struct Result {
   bench::Summary latency_us;
@@ -48,16 +43,16 @@ Result Measure(int frames, const std::function<int64_t()>& step_and_hold, const 
   const auto start = Clock::now();
   for (int i = 0; i < frames; ++i) {
     const int64_t rendered = step_and_hold();
-    latency.push_back(static_cast<double>(NowNs() - rendered) / 1e3);
+    latency.push_back(static_cast<double>(bench::MonotonicNanoseconds() - rendered) / 1e3);
   }
   Result result;
   result.fps = frames / std::chrono::duration<double>(Clock::now() - start).count();
   result.latency_us = bench::Summarize(std::move(latency));
   std::vector<double> trips;
   for (int i = 0; i < 1000; ++i) {
-    const int64_t before = NowNs();
+    const int64_t before = bench::MonotonicNanoseconds();
     round_trip();
-    trips.push_back(static_cast<double>(NowNs() - before) / 1e3);
+    trips.push_back(static_cast<double>(bench::MonotonicNanoseconds() - before) / 1e3);
   }
   result.round_trip_us = bench::Summarize(std::move(trips));
   return result;
@@ -133,9 +128,9 @@ double MemcpyFloorUs(std::size_t bytes) {
   std::vector<double> us;
   for (int i = 0; i < 2000; ++i) {
     from[static_cast<std::size_t>(i) % bytes] = static_cast<uint8_t>(i);  // keep the copy from being elided
-    const int64_t before = NowNs();
+    const int64_t before = bench::MonotonicNanoseconds();
     std::memcpy(to.data(), from.data(), bytes);
-    us.push_back(static_cast<double>(NowNs() - before) / 1e3);
+    us.push_back(static_cast<double>(bench::MonotonicNanoseconds() - before) / 1e3);
   }
   volatile uint8_t sink = to[bytes / 2];
   (void)sink;

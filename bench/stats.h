@@ -1,11 +1,21 @@
 // Order statistics for benchmark samples.
 #pragma once
 
+#include <time.h>
+
 #include <algorithm>
+#include <cstdint>
 #include <cstddef>
 #include <vector>
 
 namespace sim4cv::bench {
+
+// CLOCK_MONOTONIC in nanoseconds: the clock Frame.render_end_mono_ns uses.
+inline int64_t MonotonicNanoseconds() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
 
 struct Summary {
   double median = 0, p99 = 0, max = 0, mean = 0;

@@ -1,5 +1,7 @@
 #include "requests.h"
 
+#include <algorithm>
+
 #include "protocol/framing.h"
 
 namespace sim4cv::detail {
@@ -48,6 +50,15 @@ proto::Envelope ControlsRequest(uint32_t entity_id, float steering, float thrott
   controls.set_throttle(throttle);
   controls.set_brake(brake);
   return envelope;
+}
+
+bool TakeQueued(std::deque<proto::Envelope>& pending, proto::Envelope::KindCase kind, proto::Envelope& out) {
+  const auto queued =
+      std::find_if(pending.begin(), pending.end(), [kind](const proto::Envelope& e) { return e.kind_case() == kind; });
+  if (queued == pending.end()) return false;
+  out.Swap(&*queued);
+  pending.erase(queued);
+  return true;
 }
 
 }  // namespace sim4cv::detail

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -17,5 +18,10 @@ proto::Envelope SubscribeRequest(const std::string& camera, const std::vector<pr
 proto::Envelope StepRequest();
 proto::Envelope TrackerOutputRequest(uint64_t frame_id, float x, float y, float width, float height, float confidence);
 proto::Envelope ControlsRequest(uint32_t entity_id, float steering, float throttle, float brake);
+
+// Moves the oldest queued envelope of `kind` into `out`. Clients queue the
+// envelopes that arrive while they wait for another kind (a State while
+// waiting for a Frame, say), so no answer is lost or answered twice.
+bool TakeQueued(std::deque<proto::Envelope>& pending, proto::Envelope::KindCase kind, proto::Envelope& out);
 
 }  // namespace sim4cv::detail

@@ -183,13 +183,7 @@ bool UdpClient::Request(const Envelope& request, Envelope::KindCase kind, Envelo
 }
 
 bool UdpClient::ReceiveKind(Envelope::KindCase kind, Envelope& out, Deadline deadline) {
-  const auto queued =
-      std::find_if(pending_.begin(), pending_.end(), [kind](const Envelope& e) { return e.kind_case() == kind; });
-  if (queued != pending_.end()) {
-    out.Swap(&*queued);
-    pending_.erase(queued);
-    return true;
-  }
+  if (detail::TakeQueued(pending_, kind, out)) return true;
   while (ReadEnvelope(deadline)) {
     if (scratch_.kind_case() == kind) {
       if (&out != &scratch_) out.Swap(&scratch_);
