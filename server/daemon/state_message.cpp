@@ -1,13 +1,12 @@
 #include "server/daemon/state_message.h"
 
+#include "server/session/proto_math.h"
+
 namespace sim4cv::daemon {
 namespace {
 
-void SetVec3(const Eigen::Vector3d& v, proto::Vec3& out) {
-  out.set_x(v.x());
-  out.set_y(v.y());
-  out.set_z(v.z());
-}
+using session::SetQuaternion;
+using session::SetVec3;
 
 void FillEntity(uint32_t id, const std::string& name, proto::EntityKind kind, const sim::BodyState& body,
                 proto::EntityState& out) {
@@ -15,11 +14,7 @@ void FillEntity(uint32_t id, const std::string& name, proto::EntityKind kind, co
   out.set_name(name);
   out.set_kind(kind);
   SetVec3(body.position, *out.mutable_position());
-  proto::Quaternion& q = *out.mutable_orientation();
-  q.set_w(body.orientation.w());
-  q.set_x(body.orientation.x());
-  q.set_y(body.orientation.y());
-  q.set_z(body.orientation.z());
+  SetQuaternion(body.orientation, *out.mutable_orientation());
   SetVec3(body.linear_velocity, *out.mutable_linear_velocity());
   SetVec3(body.angular_velocity, *out.mutable_angular_velocity());
 }

@@ -4,7 +4,6 @@
 
 #include <Eigen/Core>
 
-#include "server/sim/closed_path.h"
 #include "server/sim/scene.h"
 #include "server/sim/state.h"
 

@@ -7,6 +7,7 @@
 
 #include "protocol/framing.h"
 #include "server/common/check.h"
+#include "server/session/proto_math.h"
 
 namespace sim4cv::transport {
 namespace {
@@ -51,18 +52,8 @@ void FillImageHeader(const PixelChannel& pixels, uint32_t width, proto::Image& i
   image.set_stride(width * pixels.bytes_per_pixel);
 }
 
-void SetVec3(const Eigen::Vector3d& v, proto::Vec3& out) {
-  out.set_x(v.x());
-  out.set_y(v.y());
-  out.set_z(v.z());
-}
-
-void SetQuaternion(const Eigen::Quaterniond& q, proto::Quaternion& out) {
-  out.set_w(q.w());
-  out.set_x(q.x());
-  out.set_y(q.y());
-  out.set_z(q.z());
-}
+using session::SetQuaternion;
+using session::SetVec3;
 
 void FillCamera(const render::CameraIntrinsics& intrinsics, const render::Pose& pose, proto::Frame& meta) {
   proto::CameraIntrinsics& out = *meta.mutable_camera_intrinsics();
