@@ -1,11 +1,10 @@
 // Physics and rendering cost, in-process, without transports:
 //   1. physics steps per second of the scene's World (car + camera UAV), no rendering;
 //   2. physics real-time factor of one car and four UAVs (the paper's four
-//      trackers each flying its own UAV) at 240 Hz, built from the vehicle components;
+//      trackers each flying its own UAV) at 240 Hz: the scene's World with
+//      three UAVs spawned, all following the car;
 //   3. frames rendered per second (RGB + depth + mask read back, boxes) from the UAV camera.
 //   sim4cv_bench_sim_render [--map FILE] [--width W] [--height H] [--steps N] [--frames N]
-#include <btBulletDynamicsCommon.h>
-
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -16,9 +15,6 @@
 #include "server/render/ground_truth.h"
 #include "server/render/renderer.h"
 #include "server/render/scene_graphics.h"
-#include "server/sim/vehicles/car.h"
-#include "server/sim/vehicles/car_driver.h"
-#include "server/sim/vehicles/quadcopter.h"
 #include "server/sim/world.h"
 
 namespace {
@@ -29,41 +25,23 @@ constexpr double kDt = 1.0 / 240.0;
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
-// One car on the scene's lane and four quadcopters holding stations around it.
+// The scene's World with three more UAVs spawned, each filming the car from
+// its own altitude like the scene's camera UAV: one car and four UAVs (the
+// paper's four trackers each flying its own UAV), all in the full map.
 double CarAndFourUavsRealTimeFactor(const sim::Scene& scene, int steps) {
-  btDefaultCollisionConfiguration config;
-  btCollisionDispatcher dispatcher(&config);
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
-  btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
-  world.setGravity(btVector3(0, 0, -9.81));
-  btStaticPlaneShape ground_shape(btVector3(0, 0, 1), 0);
-  btRigidBody ground(btRigidBody::btRigidBodyConstructionInfo(0, nullptr, &ground_shape));
-  world.addRigidBody(&ground);
-  const auto& lane = scene.car_lane;
-  vehicles::Car car(world, scene.car.params, lane[0], std::atan2(lane[1].y() - lane[0].y(), lane[1].x() - lane[0].x()));
-  vehicles::CarDriver driver(scene.car.params, vehicles::Polyline(lane, true), scene.car.cruise_speed);
-  std::vector<std::unique_ptr<vehicles::Quadcopter>> uavs;
-  for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector3d position(lane[0].x() + 5.0 * i, lane[0].y() - 10.0, 15.0);
-    uavs.push_back(std::make_unique<vehicles::Quadcopter>(world, scene.uav.params, position, 0.0));
+  sim::World world(scene);
+  sim::State state = world.InitialState();
+  const sim::Agent& camera_uav = *state.Find(sim::kUavEntityId);
+  for (int i = 1; i < 4; ++i) {
+    sim::SpawnPose pose{camera_uav.body.position + Eigen::Vector3d(3.0 * i, 0.0, 2.0 * i), camera_uav.body.Yaw()};
+    const uint32_t id = world.Spawn(state, sim::AgentKind::kUav, "", pose);
+    sim::UavOrder follow = camera_uav.uav_order;
+    follow.altitude += 2.0 * i;
+    world.SetUavOrder(state, id, follow);
   }
   const auto start = Clock::now();
-  for (int step = 0; step < steps; ++step) {
-    car.SetControls(driver.Update(car.State(), kDt));
-    car.Update(kDt);
-    const Eigen::Vector3d target = car.State().position;
-    for (int i = 0; i < 4; ++i) {
-      uavs[static_cast<std::size_t>(i)]->SetCommand(vehicles::QuadcopterCommand::Hold(
-          target + Eigen::Vector3d(-8.0 + 3.0 * i, -3.0, 15.0), 0.0, car.State().linear_velocity));
-      uavs[static_cast<std::size_t>(i)]->Update(kDt);
-    }
-    world.stepSimulation(kDt, 0);
-  }
-  const double seconds = Seconds(Clock::now() - start);
-  uavs.clear();
-  world.removeRigidBody(&ground);
-  return steps * kDt / seconds;
+  for (int step = 0; step < steps; ++step) world.Step(state, kDt);
+  return steps * kDt / Seconds(Clock::now() - start);
 }
 
 }  // namespace
@@ -111,8 +89,9 @@ int main(int argc, char** argv) {
   for (int i = 0; i < frames; ++i) {
     for (int s = 0; s < 8; ++s) world.Step(state, kDt);  // the scene moves as it does at 30 Hz
     const auto start = Clock::now();
-    renderer.Render(graphics.CameraAt(0, state), graphics.DrawItems(state), {rgb.data(), depth.data(), mask.data()},
-                    unoccluded);
+    graphics.Update(state);
+    renderer.Render(graphics.CameraAt(scene.cameras[0], state), graphics.draw_items(),
+                    {rgb.data(), depth.data(), mask.data()}, unoccluded);
     auto& labelled = graphics.labelled_objects();
     for (auto& object : labelled) object.unoccluded_pixels = unoccluded[object.instance];
     extractor.Extract(mask.data(), width, height, labelled, boxes);

@@ -40,6 +40,7 @@ Usage: sim4cvd [flags]
   --scene FILE              scene file to load (docs/scenes.md); default: the embedded default scene
   --map FILE                a tile map to load instead (docs/maps.md), e.g. scenes/tracking/easy_urban.map
   --route NAME              the map's closed route the target car drives (default: its first closed route)
+  --maps-dir DIR            where a client's LoadMap finds maps by name (default: the source tree's scenes/)
   --car-speed M/S           the target car's set speed on a map (default 6; the paper uses 4, 6 and 8)
   --seed N                  seed for every random choice of the simulation (default 1)
   --bind ADDRESS            address the TCP port listens on (default 127.0.0.1; 0.0.0.0 for all)
@@ -76,6 +77,8 @@ SIGINT or SIGTERM end it cleanly.
 )";
 }
 
+std::string DefaultMapsDir() { return SIM4CV_DEFAULT_MAPS_DIR; }
+
 std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::string& help_text) {
   Config config;
   using Setter = std::function<void(const std::string& flag, const std::string& value)>;
@@ -83,6 +86,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--scene", [&](auto&, auto& v) { config.scene_file = v; }},
       {"--map", [&](auto&, auto& v) { config.map_file = v; }},
       {"--route", [&](auto&, auto& v) { config.route = v; }},
+      {"--maps-dir", [&](auto&, auto& v) { config.maps_dir = v; }},
       {"--car-speed", [&](auto& f, auto& v) { config.car_speed = ParseNumber<float>(f, v, 0.1f, 40.0f); }},
       {"--seed", [&](auto& f, auto& v) { config.seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
       {"--bind", [&](auto&, auto& v) { config.bind_address = v; }},

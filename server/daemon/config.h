@@ -10,11 +10,15 @@
 
 namespace sim4cv::daemon {
 
+// The source tree's scenes/ folder, where the shipped maps are.
+std::string DefaultMapsDir();
+
 struct Config {
   std::string scene_file;  // empty: the embedded default scene
   std::string map_file;    // a tile map (docs/maps.md) instead of a scene file
   std::string route;       // the map route the target car drives; empty: the first closed one
   float car_speed = 6.0f;  // m/s, the target car's set speed on a map
+  std::string maps_dir = DefaultMapsDir();  // where LoadMap finds shipped maps by name
   uint64_t seed = 1;
   std::string bind_address = "127.0.0.1";
   uint16_t tcp_port = 0;

@@ -25,25 +25,16 @@ log::Level ParseLevel(const std::string& name) {
   return log::Level::kInfo;
 }
 
-proto::Welcome MakeWelcome(const Config& config, const sim::Scene& scene,
-                           const std::vector<std::unique_ptr<transport::Transport>>& transports) {
+// The fixed part of every Welcome; the scene's name, cameras and entities
+// come from the WorldDirectory when a client says Hello.
+proto::Welcome MakeWelcome(const Config& config, const std::vector<std::unique_ptr<transport::Transport>>& transports) {
   proto::Welcome welcome;
   welcome.set_protocol_version(wire::kProtocolVersion);
   welcome.set_server_version(SIM4CV_VERSION);
-  welcome.set_scene_name(scene.name);
-  for (const auto& camera : scene.cameras) {
-    proto::CameraInfo* info = welcome.add_cameras();
-    info->set_name(camera.name);
-    info->set_width(camera.width);
-    info->set_height(camera.height);
-    info->set_fov_y_deg(camera.fov_y_deg);
-    info->set_mounted_on(camera.mounted_on);
-  }
   for (const auto& t : transports) *welcome.add_transports() = t->info();
   welcome.set_mode(config.mode);
   welcome.set_physics_hz(config.physics_hz);
   welcome.set_frame_hz(config.frame_hz);
-  FillEntityInfos(scene, welcome);
   return welcome;
 }
 
@@ -59,11 +50,12 @@ int RunDaemon(const Config& config) {
   signal(SIGPIPE, SIG_IGN);  // a client that vanishes must not kill the daemon
   signal(SIGXFSZ, SIG_IGN);  // a run log over the file size limit is a write error, not death
 
-  const sim::Scene scene =
+  const auto initial_scene = std::make_shared<const sim::Scene>(
       !config.map_file.empty()
           ? sim::SceneFromMap(config.map_file, config.route, config.car_speed, config.width, config.height)
       : config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
-                                  : sim::LoadSceneFile(config.scene_file, config.width, config.height);
+                                  : sim::LoadSceneFile(config.scene_file, config.width, config.height));
+  const sim::Scene& scene = *initial_scene;
 
   std::vector<std::unique_ptr<transport::Transport>> transports;
   transports.push_back(transport::MakeTcpTransport(
@@ -89,9 +81,11 @@ int RunDaemon(const Config& config) {
   session::CommandQueue commands;
   session::LatestState latest_state;
   session::Counters counters;
-  const session::ServerContext context{scene,        config.mode,     MakeWelcome(config, scene, transports), commands,
-                                       latest_state, config.max_message_bytes, counters};
-  SimThread sim(config, scene, commands, latest_state, counters);
+  session::WorldDirectory directory;
+  const session::ServerContext context{scene,        config.mode,  MakeWelcome(config, transports),
+                                       directory,    commands,     latest_state,
+                                       config.max_message_bytes,   counters};
+  SimThread sim(config, initial_scene, commands, latest_state, directory, counters);
   sim.Start();
   for (auto& t : transports) t->Start(context);
 

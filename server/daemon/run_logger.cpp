@@ -8,7 +8,7 @@
 namespace sim4cv::daemon {
 namespace {
 
-runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene) {
+runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, const sim::State& initial) {
   runlog::RunLogHeader header;
   header.creator = "sim4cvd " SIM4CV_VERSION;
   header.label = config.log_label.empty() ? scene.name : config.log_label;
@@ -17,20 +17,26 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene) {
   header.physics_hz = config.physics_hz;
   header.frame_hz = config.frame_hz;
   header.seed = config.seed;
-  header.entities = {{sim::kCarEntityId, scene.car.name, runlog::kEntityKindCar, runlog::kObjectClassCar},
-                     {sim::kUavEntityId, scene.uav.name, runlog::kEntityKindUav, runlog::kObjectClassUav}};
+  // The entities and cameras at the start; records hold every entity
+  // present at their frame, so ones spawned later appear there by id.
+  for (const sim::Agent& agent : initial.agents) {
+    const bool car = agent.kind == sim::AgentKind::kCar;
+    header.entities.push_back({agent.id, agent.name, car ? runlog::kEntityKindCar : runlog::kEntityKindUav,
+                               car ? runlog::kObjectClassCar : runlog::kObjectClassUav});
+  }
   for (const auto& camera : scene.cameras) {
-    // Every camera rides the car or the UAV, as SceneGraphics places them.
-    const uint32_t mount = scene.MountedOnCar(camera) ? sim::kCarEntityId : sim::kUavEntityId;
-    header.cameras.push_back({camera.name, mount, camera.width, camera.height});
+    const sim::Agent* mount = initial.FindByName(camera.mounted_on);
+    header.cameras.push_back({camera.name, mount ? mount->id : 0u, camera.width, camera.height});
   }
   return header;
 }
 
 }  // namespace
 
-RunLogger::RunLogger(const Config& config, const sim::Scene& scene, session::Counters& counters)
-    : counters_(counters), writer_(std::make_unique<runlog::RunLogWriter>(config.log_file, MakeHeader(config, scene))) {}
+RunLogger::RunLogger(const Config& config, const sim::Scene& scene, const sim::State& initial,
+                     session::Counters& counters)
+    : counters_(counters),
+      writer_(std::make_unique<runlog::RunLogWriter>(config.log_file, MakeHeader(config, scene, initial))) {}
 
 void RunLogger::OfferFrame(const session::FrameRef& frame) {
   for (const render::GroundTruthBox& box : frame->boxes) {
@@ -45,15 +51,16 @@ void RunLogger::Append(const sim::State& state, const session::Scheduler& schedu
     const auto start = std::chrono::steady_clock::now();
     record_.frame_id = state.frame_id;
     record_.sim_time = state.sim_time;
-    record_.entities.push_back({sim::kCarEntityId, state.car});
-    record_.entities.push_back({sim::kUavEntityId, state.uav});
+    for (const sim::Agent& agent : state.agents) record_.entities.push_back({agent.id, agent.body});
     // State keeps each client's latest report until it sends another, so a
     // box recurs in every record until replaced; its frame_id tells them apart.
     for (const sim::TrackerReport& report : state.tracker_reports) {
       const std::optional<uint32_t> camera = scheduler.CameraOf(report.client_id);
       record_.tracker_boxes.push_back({camera ? static_cast<uint16_t>(*camera) : runlog::kNoCamera, report});
     }
-    record_.controls.push_back({sim::kCarEntityId, state.car_command});
+    for (const sim::Agent& agent : state.agents) {
+      if (agent.kind == sim::AgentKind::kCar) record_.controls.push_back({agent.id, agent.car_command});
+    }
     try {
       writer_->Append(record_);
     } catch (const std::exception& error) {

@@ -28,7 +28,7 @@ class RunLogger final : public session::ClientLink {
  public:
   // Creates (truncates) config.log_file and writes the header. Throws naming
   // the file if it cannot: that refuses the start, before any frame.
-  RunLogger(const Config& config, const sim::Scene& scene, session::Counters& counters);
+  RunLogger(const Config& config, const sim::Scene& scene, const sim::State& initial, session::Counters& counters);
 
   // The ground-truth box of the target (the car) in one rendered camera
   // frame of the current simulation frame, if the car is visible in it.

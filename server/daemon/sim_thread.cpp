@@ -28,16 +28,19 @@ struct Overloaded : Handlers... {
 
 }  // namespace
 
-SimThread::SimThread(const Config& config, const sim::Scene& scene, session::CommandQueue& commands,
-                     session::LatestState& latest_state, session::Counters& counters)
-    : config_(config), scene_(scene), commands_(commands), latest_state_(latest_state), world_(scene),
-      state_(world_.InitialState()) {
-  if (!config.replay_file.empty()) world_.SetReplay(LoadReplayTrack(config, scene));
+SimThread::SimThread(const Config& config, std::shared_ptr<const sim::Scene> scene, session::CommandQueue& commands,
+                     session::LatestState& latest_state, session::WorldDirectory& directory,
+                     session::Counters& counters)
+    : config_(config), commands_(commands), latest_state_(latest_state), directory_(directory),
+      sim_(config_, std::move(scene)) {
+  const sim::Scene& scene_ref = sim_.scene();
+  if (!config.replay_file.empty()) sim_.world().SetReplay(LoadReplayTrack(config, scene_ref));
   if (!config.log_file.empty()) {
-    logger_ = std::make_unique<RunLogger>(config, scene, counters);
+    logger_ = std::make_unique<RunLogger>(config, scene_ref, sim_.state(), counters);
     scheduler_.SetObserver(logger_.get());
   }
   PublishState();  // GetState before the first step sees frame 0
+  PublishWorld();
 }
 
 SimThread::~SimThread() {
@@ -55,14 +58,7 @@ void SimThread::Start() {
       gl_ = render::CreateOsMesaContext();
       gl_->MakeCurrent();
       renderer_name_ = gl_->RendererName();
-      graphics_ = std::make_unique<render::SceneGraphics>(scene_);
-      uint32_t max_width = 1, max_height = 1;
-      for (const auto& camera : scene_.cameras) {
-        max_width = std::max(max_width, camera.width);
-        max_height = std::max(max_height, camera.height);
-      }
-      renderer_ = std::make_unique<render::Renderer>(graphics_->meshes(), max_width, max_height);
-      unoccluded_pixels_.assign(graphics_->instance_id_bound(), 0);
+      BuildGraphics();
       ready.set_value();
     } catch (...) {
       ready.set_exception(std::current_exception());
@@ -128,6 +124,22 @@ void SimThread::RunRealtime() {
   }
 }
 
+void SimThread::BuildGraphics() {
+  // A new scene (or a camera larger than any before) needs new meshes or
+  // larger render targets; the old ones die first, with the context current.
+  uint32_t width = 1, height = 1;
+  for (const auto& camera : sim_.cameras()) {
+    width = std::max(width, camera.width);
+    height = std::max(height, camera.height);
+  }
+  renderer_.reset();
+  graphics_ = std::make_unique<render::SceneGraphics>(sim_.scene());
+  renderer_ = std::make_unique<render::Renderer>(graphics_->meshes(), width, height);
+  renderer_width_ = width;
+  renderer_height_ = height;
+  unoccluded_pixels_.assign(graphics_->instance_id_bound(), 0);
+}
+
 void SimThread::ApplyCommands() {
   commands_.Drain(drained_);
   for (auto& command : drained_) {
@@ -137,12 +149,10 @@ void SimThread::ApplyCommands() {
                      scheduler_.Subscribe(client, c.camera_index, c.delivery, std::move(c.link));
                    },
                    [&](session::StepCommand&) { scheduler_.AddStep(client); },
-                   [&](session::ControlsCommand& c) {
-                     state_.car_command = {c.steering, c.throttle, c.brake, true};
-                   },
+                   [&](session::ControlsCommand& c) { ApplyControls(c); },
                    [&](session::TrackerOutputCommand& c) {
                      sim::TrackerReport report{client, c.frame_id, c.x, c.y, c.width, c.height, c.confidence};
-                     auto& reports = state_.tracker_reports;
+                     auto& reports = sim_.state().tracker_reports;
                      auto it = std::lower_bound(reports.begin(), reports.end(), client,
                                                 [](const sim::TrackerReport& r, uint32_t id) { return r.client_id < id; });
                      if (it != reports.end() && it->client_id == client) {
@@ -151,6 +161,7 @@ void SimThread::ApplyCommands() {
                        reports.insert(it, report);
                      }
                    },
+                   [&](session::ConfigureCommand& c) { Configure(c); },
                    [&](session::DisconnectCommand&) { scheduler_.Remove(client); },
                },
                command.body);
@@ -158,16 +169,84 @@ void SimThread::ApplyCommands() {
   drained_.clear();  // drop links held by commands before waiting again
 }
 
+void SimThread::ApplyControls(session::ControlsCommand& controls) {
+  sim::Agent* car = sim_.state().Find(controls.entity_id);
+  if (car && car->kind == sim::AgentKind::kCar) {
+    car->car_command = {controls.steering, controls.throttle, controls.brake, true};
+    return;
+  }
+  if (!controls.link) return;
+  proto::Envelope reply;
+  proto::Error& error = *reply.mutable_error();
+  error.set_code(proto::ERROR_CODE_UNKNOWN_ENTITY);
+  error.set_message("Controls.entity_id " + std::to_string(controls.entity_id) + " is not a car; the world holds " +
+                    sim::AgentList(sim_.state()));
+  controls.link->OfferReply(std::move(reply));
+}
+
+void SimThread::Configure(session::ConfigureCommand& command) {
+  proto::Envelope reply;
+  try {
+    AfterChange(sim_.Apply(command.request, *reply.mutable_configured()));
+  } catch (const ConfigureError& refused) {
+    reply.Clear();
+    proto::Error& error = *reply.mutable_error();
+    error.set_code(refused.code());
+    error.set_message(refused.what());
+    error.set_request_id(command.request.request_id());
+    LOG_INFO("Configure " << command.request.request_id() << " refused: " << refused.what());
+  }
+  if (command.link) command.link->OfferReply(std::move(reply));
+}
+
+void SimThread::AfterChange(const Simulation::Change& change) {
+  const auto tell = [](const std::vector<std::shared_ptr<session::ClientLink>>& links, const std::string& message) {
+    for (const auto& link : links) {
+      proto::Envelope reply;
+      reply.mutable_error()->set_code(proto::ERROR_CODE_UNKNOWN_CAMERA);
+      reply.mutable_error()->set_message(message);
+      link->OfferReply(std::move(reply));
+    }
+  };
+  if (change.new_scene) {
+    const auto scene_cameras = static_cast<uint32_t>(sim_.scene().cameras.size());
+    tell(scheduler_.DropCamerasFrom(scene_cameras),
+         "the camera you subscribed to was removed: the world was reset or a map loaded; subscribe again");
+    for (uint32_t i = 0; i < scene_cameras; ++i) scheduler_.SetCameraDead(i, false);
+    BuildGraphics();
+    PublishState();
+  }
+  for (const uint32_t camera : change.removed_cameras) {
+    tell(scheduler_.SetCameraDead(camera, true),
+         "the camera you subscribed to was removed (it, or the entity it rode, is gone); it sends no more frames");
+  }
+  for (const auto& camera : sim_.cameras()) {
+    if (camera.width > renderer_width_ || camera.height > renderer_height_) {
+      BuildGraphics();
+      break;
+    }
+  }
+  PublishWorld();
+}
+
+void SimThread::PublishWorld() {
+  proto::WorldInfo world;
+  sim_.FillWorldInfo(world);
+  directory_.Publish(std::move(world));
+}
+
 void SimThread::AdvanceFrame() {
   const double dt = 1.0 / config_.physics_hz;
-  for (uint32_t i = 0; i < config_.substeps_per_frame(); ++i) world_.Step(state_, dt);
-  ++state_.frame_id;
+  sim::State& state = sim_.state();
+  for (uint32_t i = 0; i < config_.substeps_per_frame(); ++i) sim_.world().Step(state, dt);
+  ++state.frame_id;
   PublishState();
-  for (uint32_t camera = 0; camera < scene_.cameras.size(); ++camera) {
+  graphics_->Update(state);
+  for (uint32_t camera = 0; camera < sim_.cameras().size(); ++camera) {
     if (scheduler_.CameraWanted(camera)) RenderCamera(camera);
   }
   if (logger_) {
-    logger_->Append(state_, scheduler_);
+    logger_->Append(state, scheduler_);
     scheduler_.ReleaseFrames();  // only now, with the record written, may clients see the frames
   }
 }
@@ -175,22 +254,24 @@ void SimThread::AdvanceFrame() {
 void SimThread::RenderCamera(uint32_t camera_index) {
   session::Frame* frame = nullptr;
   session::FrameRef ref = frame_pool_.Acquire(&frame);
-  const auto& spec = scene_.cameras[camera_index];
+  const sim::State& state = sim_.state();
+  const sim::CameraSpec& spec = sim_.cameras()[camera_index];
   const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
   // Pooled frames keep their buffers, so these resizes allocate only at start.
   frame->rgb.resize(pixels * 3);
   frame->depth.resize(pixels);
   frame->mask.resize(pixels);
-  frame->frame_id = state_.frame_id;
-  frame->sim_time = state_.sim_time;
+  frame->frame_id = state.frame_id;
+  frame->sim_time = state.sim_time;
   frame->camera_index = camera_index;
+  frame->camera_name = spec.name;
   frame->width = spec.width;
   frame->height = spec.height;
 
   auto& labelled = graphics_->labelled_objects();
   for (const auto& object : labelled) unoccluded_pixels_[object.instance] = 0;
-  const render::CameraView view = graphics_->CameraAt(camera_index, state_);
-  renderer_->Render(view, graphics_->DrawItems(state_), {frame->rgb.data(), frame->depth.data(), frame->mask.data()},
+  const render::CameraView view = graphics_->CameraAt(spec, state);
+  renderer_->Render(view, graphics_->draw_items(), {frame->rgb.data(), frame->depth.data(), frame->mask.data()},
                     unoccluded_pixels_);
   for (auto& object : labelled) object.unoccluded_pixels = unoccluded_pixels_[object.instance];
   boxes_.Extract(frame->mask.data(), spec.width, spec.height, labelled, frame->boxes);
@@ -198,8 +279,8 @@ void SimThread::RenderCamera(uint32_t camera_index) {
   const render::BoxProjector camera(view);
   frame->intrinsics = camera.intrinsics();
   frame->camera_pose = render::OpenCvPoseOf(view);
-  graphics_->catalog().Fill(state_, camera, frame->boxes, frame->objects);
-  FillStateMessage(scene_, state_, frame->state);
+  graphics_->catalog().Fill(graphics_->moving_objects(), camera, frame->boxes, frame->objects);
+  FillStateMessage(state, frame->state);
   frame->render_end_mono_ns = MonotonicNanoseconds();
   scheduler_.Deliver(ref);
 }
@@ -207,11 +288,12 @@ void SimThread::RenderCamera(uint32_t camera_index) {
 void SimThread::PublishState() {
   session::StateSnapshot* snapshot = nullptr;
   session::StateRef ref = state_pool_.Acquire(&snapshot);
-  FillStateMessage(scene_, state_, snapshot->state);
+  const sim::State& state = sim_.state();
+  FillStateMessage(state, snapshot->state);
   snapshot->tracker_clients.clear();
-  snapshot->tracker_outputs.resize(state_.tracker_reports.size());
-  for (std::size_t i = 0; i < state_.tracker_reports.size(); ++i) {
-    const sim::TrackerReport& r = state_.tracker_reports[i];
+  snapshot->tracker_outputs.resize(state.tracker_reports.size());
+  for (std::size_t i = 0; i < state.tracker_reports.size(); ++i) {
+    const sim::TrackerReport& r = state.tracker_reports[i];
     snapshot->tracker_clients.push_back(r.client_id);
     proto::TrackerOutput& out = snapshot->tracker_outputs[i];
     out.set_frame_id(r.frame_id);

@@ -1,7 +1,8 @@
 // The one thread that touches Bullet and OpenGL. Per step it drains the
-// command queue, advances physics by a frame's worth of substeps, renders
-// every camera someone subscribed to, hands the frames to the scheduler and,
-// with --log, appends the frame's run-log record.
+// command queue (carrying out Configure requests and answering them),
+// advances physics by a frame's worth of substeps, renders every camera
+// someone subscribed to, hands the frames to the scheduler and, with --log,
+// appends the frame's run-log record.
 #pragma once
 
 #include <atomic>
@@ -12,6 +13,7 @@
 
 #include "server/daemon/config.h"
 #include "server/daemon/run_logger.h"
+#include "server/daemon/simulation.h"
 #include "server/render/ground_truth.h"
 #include "server/session/command_queue.h"
 #include "server/session/scheduler.h"
@@ -30,8 +32,8 @@ class SimThread {
  public:
   // With config.replay_file, loads the replayed log; with config.log_file,
   // creates the run log. Throws naming the file if either cannot be.
-  SimThread(const Config& config, const sim::Scene& scene, session::CommandQueue& commands,
-            session::LatestState& latest_state, session::Counters& counters);
+  SimThread(const Config& config, std::shared_ptr<const sim::Scene> scene, session::CommandQueue& commands,
+            session::LatestState& latest_state, session::WorldDirectory& directory, session::Counters& counters);
   ~SimThread();
 
   // Starts the thread and waits until its GL context and renderer exist;
@@ -48,19 +50,23 @@ class SimThread {
   void RunLockstep();
   void RunRealtime();
   void ApplyCommands();
+  void ApplyControls(session::ControlsCommand& controls);
+  void Configure(session::ConfigureCommand& command);
+  void AfterChange(const Simulation::Change& change);
+  void BuildGraphics();
   void AdvanceFrame();
   void RenderCamera(uint32_t camera_index);
   void PublishState();
+  void PublishWorld();
 
   const Config config_;
-  const sim::Scene& scene_;
   session::CommandQueue& commands_;
   session::LatestState& latest_state_;
+  session::WorldDirectory& directory_;
   // Pools first: frames handed out must be returned before the pools go.
   session::FramePool frame_pool_{4};
   session::StatePool state_pool_{4};
-  sim::World world_;
-  sim::State state_;
+  Simulation sim_;
   std::unique_ptr<RunLogger> logger_;  // null without --log; the scheduler's observer
   session::Scheduler scheduler_;
   std::vector<session::Command> drained_;
@@ -69,6 +75,7 @@ class SimThread {
   std::unique_ptr<render::Renderer> renderer_;
   render::BoxExtractor boxes_;
   std::vector<uint32_t> unoccluded_pixels_;
+  uint32_t renderer_width_ = 0, renderer_height_ = 0;
   std::string renderer_name_;
   std::atomic<bool> running_{false};
   std::thread thread_;

@@ -18,53 +18,49 @@ void ObjectCatalog::AddStatic(InstanceId instance, uint32_t object_class, const 
     high = high.cwiseMax(p);
   }
   const Eigen::Matrix4d world_from_model_d = world_from_model.cast<double>();
-  Entry entry{instance, object_class, Source::kStatic, {}, 0.5 * (high - low)};
+  MovingObject entry;
+  entry.instance = instance;
+  entry.object_class = object_class;
+  entry.half_extents = 0.5 * (high - low);
   // The mesh's origin need not be its box's centre (map objects stand on theirs).
-  entry.pose.position = world_from_model_d.topLeftCorner<3, 3>() * (0.5 * (low + high)) +
-                        world_from_model_d.block<3, 1>(0, 3);
-  entry.pose.orientation = Eigen::Quaterniond(Eigen::Matrix3d(world_from_model_d.topLeftCorner<3, 3>())).normalized();
+  entry.position = world_from_model_d.topLeftCorner<3, 3>() * (0.5 * (low + high)) +
+                   world_from_model_d.block<3, 1>(0, 3);
+  entry.orientation = Eigen::Quaterniond(Eigen::Matrix3d(world_from_model_d.topLeftCorner<3, 3>())).normalized();
   Insert(entry);
 }
 
-void ObjectCatalog::AddBody(InstanceId instance, uint32_t object_class, Source source,
-                            const Eigen::Vector3d& half_extents) {
-  SIM4CV_THROW_UNLESS(source != Source::kStatic, "AddBody needs a moving body; use AddStatic");
-  Insert({instance, object_class, source, {}, half_extents});
-}
-
-void ObjectCatalog::Insert(const Entry& entry) {
+void ObjectCatalog::Insert(const MovingObject& entry) {
   const auto at = std::lower_bound(entries_.begin(), entries_.end(), entry.instance,
-                                   [](const Entry& e, InstanceId id) { return e.instance < id; });
+                                   [](const MovingObject& e, InstanceId id) { return e.instance < id; });
   SIM4CV_THROW_UNLESS(at == entries_.end() || at->instance != entry.instance,
                       "instance id " << entry.instance << " is labelled twice");
   entries_.insert(at, entry);
 }
 
-void ObjectCatalog::Fill(const sim::State& state, const BoxProjector& camera, std::span<const GroundTruthBox> visible,
-                         std::vector<ObjectGroundTruth>& out) const {
+void ObjectCatalog::Fill(std::span<const MovingObject> moving, const BoxProjector& camera,
+                         std::span<const GroundTruthBox> visible, std::vector<ObjectGroundTruth>& out) const {
   out.clear();
   auto next_visible = visible.begin();
-  for (const Entry& entry : entries_) {
-    // Both lists are ordered by instance id: one merged walk.
+  auto next_static = entries_.begin();
+  auto next_moving = moving.begin();
+  // All three lists are ordered by instance id: one merged walk.
+  while (next_static != entries_.end() || next_moving != moving.end()) {
+    const bool take_static =
+        next_moving == moving.end() || (next_static != entries_.end() && next_static->instance < next_moving->instance);
+    const MovingObject& entry = take_static ? *next_static++ : *next_moving++;
+    SIM4CV_ASSERT(take_static || next_static == entries_.end() || next_static->instance != entry.instance);
     while (next_visible != visible.end() && next_visible->instance < entry.instance) ++next_visible;
-    const bool has_visible_box = next_visible != visible.end() && next_visible->instance == entry.instance;
     ObjectGroundTruth object;
     object.instance = entry.instance;
     object.object_class = entry.object_class;
+    object.position = entry.position;
+    object.orientation = entry.orientation.normalized();
+    object.linear_velocity = entry.linear_velocity;
+    object.angular_velocity = entry.angular_velocity;
     object.half_extents = entry.half_extents;
-    object.has_visible_box = has_visible_box;
-    if (entry.source == Source::kStatic) {
-      object.position = entry.pose.position;
-      object.orientation = entry.pose.orientation;
-    } else {
-      const sim::BodyState& body = entry.source == Source::kCar ? state.car : state.uav;
-      object.position = body.position;
-      object.orientation = body.orientation.normalized();
-      object.linear_velocity = body.linear_velocity;
-      object.angular_velocity = body.angular_velocity;
-    }
+    object.has_visible_box = next_visible != visible.end() && next_visible->instance == entry.instance;
     object.projected_box = camera.Project(object.position, object.orientation, object.half_extents);
-    if (has_visible_box || !object.projected_box.empty()) out.push_back(object);
+    if (object.has_visible_box || !object.projected_box.empty()) out.push_back(object);
   }
 }
 

@@ -8,6 +8,7 @@
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
 #include "server/sim/vehicles/gimbal.h"
+#include "server/sim/world.h"
 
 namespace sim4cv::render {
 namespace {
@@ -28,7 +29,7 @@ Eigen::Vector3f BuildingColour(std::size_t index) {
 SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   auto add_static = [&](Mesh mesh, InstanceId instance, uint32_t object_class, const Eigen::Matrix4f& pose) {
     if (instance != kUnlabelled) {
-      labelled_.push_back({instance, object_class, 0});
+      static_labelled_.push_back({instance, object_class, 0});
       catalog_.AddStatic(instance, object_class, mesh, pose);
     }
     meshes_.push_back(std::move(mesh));
@@ -54,38 +55,49 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   }
   static_item_count_ = items_.size();
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();
+  // The scene's target car is red, as in the paper; other cars are blue.
   meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.80f, 0.10f, 0.10f}));
+  target_car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
+  meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.15f, 0.30f, 0.75f}));
   car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   meshes_.push_back(MakeUavMesh(2.0f * static_cast<float>(scene.uav.params.half_extents.x()), {0.15f, 0.15f, 0.18f}));
   uav_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
-  labelled_.insert(labelled_.begin(), {{static_cast<InstanceId>(sim::kCarEntityId), proto::OBJECT_CLASS_CAR, 0},
-                                       {static_cast<InstanceId>(sim::kUavEntityId), proto::OBJECT_CLASS_UAV, 0}});
-  // The physics boxes, which the car's and the UAV's meshes fit inside.
-  catalog_.AddBody(static_cast<InstanceId>(sim::kCarEntityId), proto::OBJECT_CLASS_CAR, ObjectCatalog::Source::kCar,
-                   scene.car.params.chassis_half_extents);
-  catalog_.AddBody(static_cast<InstanceId>(sim::kUavEntityId), proto::OBJECT_CLASS_UAV, ObjectCatalog::Source::kUav,
-                   scene.uav.params.half_extents);
-  for (const auto& object : labelled_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
-  items_.resize(static_item_count_ + 2);
+  // Agents take the ids below the static objects' (sim::kMaxAgentId).
+  instance_id_bound_ = sim::kMaxAgentId + 1;
+  for (const auto& object : static_labelled_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
 }
 
-const std::vector<DrawItem>& SceneGraphics::DrawItems(const sim::State& state) {
-  items_[static_item_count_] = {car_mesh_, BodyPose(state.car), static_cast<InstanceId>(sim::kCarEntityId)};
-  items_[static_item_count_ + 1] = {uav_mesh_, BodyPose(state.uav), static_cast<InstanceId>(sim::kUavEntityId)};
-  return items_;
+void SceneGraphics::Update(const sim::State& state) {
+  items_.resize(static_item_count_);
+  labelled_.clear();
+  moving_.clear();
+  for (const sim::Agent& agent : state.agents) {
+    const bool car = agent.kind == sim::AgentKind::kCar;
+    const auto instance = static_cast<InstanceId>(agent.id);
+    const MeshId mesh = !car ? uav_mesh_ : agent.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;
+    items_.push_back({mesh, BodyPose(agent.body), instance});
+    const uint32_t object_class = car ? proto::OBJECT_CLASS_CAR : proto::OBJECT_CLASS_UAV;
+    labelled_.push_back({instance, object_class, 0});
+    // The physics boxes, which the car's and the UAV's meshes fit inside.
+    moving_.push_back({instance, object_class, agent.body.position, agent.body.orientation, agent.body.linear_velocity,
+                       agent.body.angular_velocity,
+                       car ? scene_.car.params.chassis_half_extents : scene_.uav.params.half_extents});
+  }
+  labelled_.insert(labelled_.end(), static_labelled_.begin(), static_labelled_.end());
 }
 
-CameraView SceneGraphics::CameraAt(std::size_t camera_index, const sim::State& state) const {
-  const sim::CameraSpec& spec = scene_.cameras.at(camera_index);
-  const sim::BodyState& mount = scene_.MountedOnCar(spec) ? state.car : state.uav;
-  const vehicles::Pose body{mount.position, mount.orientation};
+CameraView SceneGraphics::CameraAt(const sim::CameraSpec& spec, const sim::State& state) const {
+  const sim::Agent* mount = spec.mounted_on.empty() ? nullptr : state.FindByName(spec.mounted_on);
+  const vehicles::Pose body = mount ? vehicles::Pose{mount->body.position, mount->body.orientation} : vehicles::Pose{};
   vehicles::Pose camera;
   if (spec.gimbal) {
     camera = vehicles::GimbalCameraPose(body, {spec.pitch_down_deg, spec.offset});
   } else {
     const double pitch = spec.pitch_down_deg * std::numbers::pi / 180.0;
+    const double yaw = spec.yaw_deg * std::numbers::pi / 180.0;
     camera.position = body.position + body.orientation * spec.offset;
-    camera.orientation = body.orientation * Eigen::Quaterniond(Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()));
+    camera.orientation = body.orientation * Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ())) *
+                         Eigen::Quaterniond(Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()));
   }
   // Camera frame: x is the viewing direction and z the image's up; the
   // up vector stays well defined even when looking straight down.

@@ -1,9 +1,10 @@
 // Turns the simulation's Scene and State into what the Renderer draws: the
 // meshes (built once), the static draw items, the labelled objects' 3D
-// ground truth, and per frame the moving bodies' items and each camera's view.
+// ground truth, and per frame the agents' items and each camera's view.
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "server/render/ground_truth.h"
@@ -20,21 +21,27 @@ class SceneGraphics {
 
   const std::vector<Mesh>& meshes() const { return meshes_; }
 
-  // Static items followed by the moving bodies at `state`. The returned
-  // vector is owned by this object and reused: no allocation per frame.
-  const std::vector<DrawItem>& DrawItems(const sim::State& state);
+  // Brings everything that moves up to `state`: the draw items, the labelled
+  // objects and the moving objects' ground truth. Reuses its vectors: no
+  // allocation per frame once the number of agents stops growing.
+  void Update(const sim::State& state);
 
-  // Labelled objects (instance id, class) in instance-id order; the renderer
-  // fills in their unoccluded pixel counts.
+  // Static items followed by the agents, as of the last Update.
+  const std::vector<DrawItem>& draw_items() const { return items_; }
+  // Labelled objects (instance id, class) in instance-id order, as of the
+  // last Update; the renderer fills in their unoccluded pixel counts.
   std::vector<LabelledObject>& labelled_objects() { return labelled_; }
+  // The agents' 3D boxes, poses and velocities, as of the last Update.
+  std::span<const MovingObject> moving_objects() const { return moving_; }
 
-  // Class, pose and 3D box of every labelled object (built once).
+  // Class, pose and 3D box of every static labelled object (built once).
   const ObjectCatalog& catalog() const { return catalog_; }
 
-  // The view of scene camera `camera_index` at `state`.
-  CameraView CameraAt(std::size_t camera_index, const sim::State& state) const;
+  // The view of `camera` at `state`. A camera mounted on no entity (or on
+  // one that is gone) stands fixed in the world: its offset is its position.
+  CameraView CameraAt(const sim::CameraSpec& camera, const sim::State& state) const;
 
-  // One more than the largest instance id in the scene.
+  // One more than the largest instance id a frame can hold.
   std::size_t instance_id_bound() const { return instance_id_bound_; }
 
  private:
@@ -42,8 +49,10 @@ class SceneGraphics {
   std::vector<Mesh> meshes_;
   std::vector<DrawItem> items_;
   std::size_t static_item_count_ = 0;
-  MeshId car_mesh_ = 0, uav_mesh_ = 0;
+  MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0;
+  std::vector<LabelledObject> static_labelled_;
   std::vector<LabelledObject> labelled_;
+  std::vector<MovingObject> moving_;
   ObjectCatalog catalog_;
   std::size_t instance_id_bound_ = 0;
 };

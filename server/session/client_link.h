@@ -1,11 +1,13 @@
-// What the sim thread may do to a connected client: hand it a frame. Each
-// transport's session implements this; the call never blocks and never does
-// I/O on the sim thread (after LibCarla's streaming sessions).
+// What the sim thread may do to a connected client: hand it a frame, or
+// answer it (a request only the sim thread can validate and apply). Each
+// transport's session implements this; the calls never block on I/O and never
+// do I/O on the sim thread (after LibCarla's streaming sessions).
 #pragma once
 
 #include <cstdint>
 
 #include "server/session/frame.h"
+#include "sim4cv.pb.h"
 
 namespace sim4cv::session {
 
@@ -15,6 +17,17 @@ class ClientLink {
   // Offers `frame` for delivery. Newest-frame subscribers keep only the latest
   // undelivered frame and count the one it replaces as dropped.
   virtual void OfferFrame(const FrameRef& frame) = 0;
+
+  // Sim thread: answers the client. The transport sends `reply` the way it
+  // sends ClientProtocol's replies, and before any frame offered after this
+  // call; after a fatal Error it closes the client, as for ClientProtocol's.
+  // A client that is already gone drops it. May allocate (configuration is
+  // rare); the frame path must not.
+  //
+  // Not pure only because the run logger (daemon::RunLogger, the scheduler's
+  // observer) is a ClientLink that no client stands behind and does not
+  // override it yet; every transport's link does. Make this `= 0` once it does.
+  virtual void OfferReply(proto::Envelope reply) { (void)reply; }
 };
 
 }  // namespace sim4cv::session

@@ -5,17 +5,12 @@
 
 #include "protocol/framing.h"
 #include "server/common/log.h"
+#include "server/session/configure_check.h"
 
 namespace sim4cv::session {
 namespace {
 
 using Outcome = ClientProtocol::Outcome;
-
-std::string CameraList(const sim::Scene& scene) {
-  std::string names;
-  for (const auto& camera : scene.cameras) names += (names.empty() ? "" : ", ") + ("'" + camera.name + "'");
-  return names;
-}
 
 // Empty if `value` is finite and within [low, high]; otherwise the complaint.
 std::string CheckRange(const char* field, double value, double low, double high) {
@@ -69,11 +64,12 @@ Outcome ClientProtocol::Handle(const proto::Envelope& request, proto::Envelope& 
     case Kind::kTrackerOutput: return HandleTrackerOutput(request.tracker_output(), reply);
     case Kind::kGetState: return HandleGetState(reply);
     case Kind::kGetStats: return HandleGetStats(reply);
+    case Kind::kConfigure: return HandleConfigure(request.configure(), reply);
     default:
       return Refuse(proto::ERROR_CODE_UNEXPECTED_MESSAGE,
                     "envelope field " + std::to_string(static_cast<int>(kind)) +
                         " is a message only the server sends; clients send Hello, Subscribe, Step, TrackerOutput, "
-                        "Controls, GetState or GetStats",
+                        "Controls, GetState, GetStats or Configure",
                     true, reply);
   }
 }
@@ -92,18 +88,24 @@ Outcome ClientProtocol::HandleHello(const proto::Hello& hello, proto::Envelope& 
   }
   handshaken_ = true;
   client_name_ = hello.client_name();
-  *reply.mutable_welcome() = context_.welcome;
-  reply.mutable_welcome()->set_client_id(client_);
+  proto::Welcome& welcome = *reply.mutable_welcome();
+  welcome = context_.welcome;
+  welcome.set_client_id(client_);
+  // The world may have changed since the daemon started (Configure).
+  proto::WorldInfo world = context_.world.Get();
+  welcome.set_scene_name(world.scene_name());
+  welcome.mutable_cameras()->Swap(world.mutable_cameras());
+  welcome.mutable_entities()->Swap(world.mutable_entities());
   LOG_INFO("client " << client_ << " ('" << client_name_ << "') completed the handshake");
   return Outcome::kReply;
 }
 
 Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto::Envelope& reply) {
-  const int camera = context_.scene.FindCamera(subscribe.camera());
+  std::string camera_names;
+  const int camera = context_.world.FindCamera(subscribe.camera(), camera_names);
   if (camera < 0) {
     return Refuse(proto::ERROR_CODE_UNKNOWN_CAMERA,
-                  "no camera named '" + subscribe.camera() + "'; this scene has " + CameraList(context_.scene), false,
-                  reply);
+                  "no camera named '" + subscribe.camera() + "'; this scene has " + camera_names, false, reply);
   }
   if (subscribe.channels_size() == 0) {
     return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, "Subscribe.channels is empty; ask for at least one channel", false,
@@ -164,19 +166,14 @@ Outcome ClientProtocol::HandleStep(proto::Envelope& reply) {
 }
 
 Outcome ClientProtocol::HandleControls(const proto::Controls& controls, proto::Envelope& reply) {
-  if (controls.entity_id() != sim::kCarEntityId) {
-    return Refuse(proto::ERROR_CODE_UNKNOWN_ENTITY,
-                  "Controls.entity_id " + std::to_string(controls.entity_id()) + " is not a car; cars in this scene: " +
-                      std::to_string(sim::kCarEntityId) + " ('" + context_.scene.car.name + "')",
-                  false, reply);
-  }
   for (const std::string& problem :
        {CheckRange("Controls.steering", controls.steering(), -1, 1), CheckRange("Controls.throttle", controls.throttle(), 0, 1),
         CheckRange("Controls.brake", controls.brake(), 0, 1)}) {
     if (!problem.empty()) return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
   }
-  context_.commands.Post(
-      {client_, ControlsCommand{controls.entity_id(), controls.steering(), controls.throttle(), controls.brake()}});
+  // Whether entity_id is a car the sim thread checks, and answers an Error through the link if not.
+  context_.commands.Post({client_, ControlsCommand{controls.entity_id(), controls.steering(), controls.throttle(),
+                                                   controls.brake(), link_.lock()}});
   return Outcome::kNoReply;
 }
 
@@ -209,6 +206,16 @@ Outcome ClientProtocol::HandleGetStats(proto::Envelope& reply) {
   auto& counters = *reply.mutable_stats()->mutable_counters();
   for (const auto& [name, value] : context_.counters.Snapshot()) counters[name] = value;
   return Outcome::kReply;
+}
+
+Outcome ClientProtocol::HandleConfigure(const proto::Configure& request, proto::Envelope& reply) {
+  if (const std::string problem = CheckConfigure(request); !problem.empty()) {
+    Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
+    reply.mutable_error()->set_request_id(request.request_id());
+    return Outcome::kReply;
+  }
+  context_.commands.Post({client_, ConfigureCommand{request, link_.lock()}});
+  return Outcome::kNoReply;
 }
 
 void ClientProtocol::OnFrameSent() {

@@ -33,6 +33,10 @@ class ClientProtocol {
   // the same way as every other Error.
   static Outcome Refuse(proto::ErrorCode code, const std::string& message, bool fatal, proto::Envelope& reply);
 
+  // Whether sending `reply` ends the connection (a fatal Error), whoever
+  // produced it: this class or the sim thread (ClientLink::OfferReply).
+  static bool EndsConnection(const proto::Envelope& reply) { return reply.has_error() && reply.error().fatal(); }
+
   // The transport delivered one frame; a lockstep client may Step again.
   void OnFrameSent();
 
@@ -55,6 +59,7 @@ class ClientProtocol {
   Outcome HandleTrackerOutput(const proto::TrackerOutput& output, proto::Envelope& reply);
   Outcome HandleGetState(proto::Envelope& reply);
   Outcome HandleGetStats(proto::Envelope& reply);
+  Outcome HandleConfigure(const proto::Configure& request, proto::Envelope& reply);
 
   ClientId client_;
   const ServerContext& context_;

@@ -30,9 +30,20 @@ struct SubscribeCommand {
 
 struct StepCommand {};
 
+// Which car the controls are for is checked by the sim thread, which knows
+// the current entities; it answers a wrong id through `link`.
 struct ControlsCommand {
   uint32_t entity_id = 0;
   float steering = 0, throttle = 0, brake = 0;
+  std::shared_ptr<ClientLink> link;
+};
+
+// A Configure whose fields are valid on their own (finite, in range); the
+// sim thread checks it against the world, carries it out between frames and
+// answers through `link` (Configured or an Error).
+struct ConfigureCommand {
+  proto::Configure request;
+  std::shared_ptr<ClientLink> link;
 };
 
 struct TrackerOutputCommand {
@@ -45,7 +56,8 @@ struct DisconnectCommand {};
 
 struct Command {
   ClientId client = 0;
-  std::variant<SubscribeCommand, StepCommand, ControlsCommand, TrackerOutputCommand, DisconnectCommand> body;
+  std::variant<SubscribeCommand, StepCommand, ControlsCommand, TrackerOutputCommand, ConfigureCommand, DisconnectCommand>
+      body;
 };
 
 }  // namespace sim4cv::session

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "server/render/ground_truth.h"
@@ -17,6 +18,10 @@ struct Frame {
   uint64_t frame_id = 0;
   double sim_time = 0.0;
   uint32_t camera_index = 0;
+  // The camera's name as the frame was rendered, so transports need not look
+  // it up in a camera list that may change meanwhile. A pooled frame keeps the
+  // string's capacity, so assigning a name no longer than before allocates nothing.
+  std::string camera_name;
   uint32_t width = 0, height = 0;
   std::vector<uint8_t> rgb;     // width*height*3
   std::vector<float> depth;     // width*height, metres

@@ -35,7 +35,7 @@ void Scheduler::Remove(ClientId client) {
 bool Scheduler::LockstepReady() const {
   bool any_lockstep = false;
   for (const auto& s : subscriptions_) {
-    if (s.delivery != proto::DELIVERY_LOCKSTEP) continue;
+    if (s.delivery != proto::DELIVERY_LOCKSTEP || Dead(s.camera_index)) continue;
     if (s.step_credits == 0) return false;
     any_lockstep = true;
   }
@@ -49,7 +49,7 @@ void Scheduler::ConsumeSteps() {
 }
 
 bool Scheduler::CameraWanted(uint32_t camera_index) const {
-  return std::any_of(subscriptions_.begin(), subscriptions_.end(),
+  return !Dead(camera_index) && std::any_of(subscriptions_.begin(), subscriptions_.end(),
                      [&](const Subscription& s) { return s.camera_index == camera_index; });
 }
 
@@ -79,6 +79,27 @@ void Scheduler::OfferToSubscribers(const FrameRef& frame) const {
     // A null link (a subscriber fed some other way, e.g. the shared-memory ring) only steps.
     if (s.camera_index == frame->camera_index && s.link) s.link->OfferFrame(frame);
   }
+}
+
+std::vector<std::shared_ptr<ClientLink>> Scheduler::SetCameraDead(uint32_t camera_index, bool dead) {
+  if (dead_cameras_.size() <= camera_index) dead_cameras_.resize(camera_index + 1, false);
+  dead_cameras_[camera_index] = dead;
+  std::vector<std::shared_ptr<ClientLink>> links;
+  for (const auto& s : subscriptions_) {
+    if (s.camera_index == camera_index && s.link) links.push_back(s.link);
+  }
+  return links;
+}
+
+std::vector<std::shared_ptr<ClientLink>> Scheduler::DropCamerasFrom(uint32_t camera_index) {
+  std::vector<std::shared_ptr<ClientLink>> links;
+  std::erase_if(subscriptions_, [&](const Subscription& s) {
+    if (s.camera_index < camera_index) return false;
+    if (s.link) links.push_back(s.link);
+    return true;
+  });
+  if (dead_cameras_.size() > camera_index) dead_cameras_.resize(camera_index);
+  return links;
 }
 
 }  // namespace sim4cv::session

@@ -44,6 +44,15 @@ class Scheduler {
 
   std::size_t subscriber_count() const { return subscriptions_.size(); }
 
+  // A camera that stops existing (its entity or itself removed) is dead: its
+  // subscribers get no frames and no longer hold lockstep back, until it
+  // lives again (Reset or LoadMap bring the scene's cameras back). Returns
+  // the links of its subscribers, to tell them.
+  std::vector<std::shared_ptr<ClientLink>> SetCameraDead(uint32_t camera_index, bool dead);
+  // Forgets every subscription to cameras at or above `camera_index` (a new
+  // scene reuses those indices); returns their links.
+  std::vector<std::shared_ptr<ClientLink>> DropCamerasFrom(uint32_t camera_index);
+
  private:
   struct Subscription {
     ClientId client = 0;
@@ -54,10 +63,14 @@ class Scheduler {
   };
   Subscription* Find(ClientId client);
   void OfferToSubscribers(const FrameRef& frame) const;
+  bool Dead(uint32_t camera_index) const {
+    return camera_index < dead_cameras_.size() && dead_cameras_[camera_index];
+  }
 
   std::vector<Subscription> subscriptions_;  // ordered by client id
   ClientLink* observer_ = nullptr;
   std::vector<FrameRef> held_;  // frames awaiting ReleaseFrames; keeps its capacity
+  std::vector<bool> dead_cameras_;  // by camera index; missing: alive
 };
 
 }  // namespace sim4cv::session

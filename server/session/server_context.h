@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <mutex>
+#include <string>
 
 #include "server/session/command_queue.h"
 #include "server/session/counters.h"
@@ -30,10 +31,43 @@ class LatestState {
   StateRef latest_;
 };
 
+// The world's entities and cameras as the sim thread last published them
+// (at start and after every change), so network threads can answer Hello and
+// validate Subscribe by camera name without touching the simulation.
+class WorldDirectory {
+ public:
+  void Publish(proto::WorldInfo world) {
+    std::lock_guard lock(mutex_);
+    world_ = std::move(world);
+  }
+  proto::WorldInfo Get() const {
+    std::lock_guard lock(mutex_);
+    return world_;
+  }
+  // Index of the camera called `name`, or -1 and the current names in `names`.
+  int FindCamera(const std::string& name, std::string& names) const {
+    std::lock_guard lock(mutex_);
+    for (int i = 0; i < world_.cameras_size(); ++i) {
+      const std::string& camera = world_.cameras(i).name();
+      if (camera.empty()) continue;  // a removed camera keeps its index, nameless
+      if (camera == name) return i;
+      names += (names.empty() ? "'" : ", '") + camera + "'";
+    }
+    return -1;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  proto::WorldInfo world_;
+};
+
 struct ServerContext {
+  // The scene the daemon started with: its cameras' sizes fix the shm ring's.
+  // Anything that can change since (entities, cameras, the map) is in `world`.
   const sim::Scene& scene;
   proto::SimMode mode;
-  proto::Welcome welcome;  // complete but for client_id; fixed once transports listen
+  proto::Welcome welcome;  // complete but for client_id and what `world` holds; fixed once transports listen
+  WorldDirectory& world;
   CommandQueue& commands;
   LatestState& latest_state;
   uint32_t max_message_bytes;

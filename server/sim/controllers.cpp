@@ -6,27 +6,44 @@
 
 namespace sim4cv::sim {
 
-double BodyState::Yaw() const {
-  const Eigen::Vector3d forward = orientation * Eigen::Vector3d::UnitX();
-  return std::atan2(forward.y(), forward.x());
-}
-
 double WrapAngle(double radians) {
   const double wrapped = std::remainder(radians, 2.0 * std::numbers::pi);
   return wrapped <= -std::numbers::pi ? wrapped + 2.0 * std::numbers::pi : wrapped;
 }
 
-UavSetpoint FollowCar(const UavSpec& uav, double pitch_down_deg, const BodyState& car) {
+UavSetpoint FollowTarget(const UavOrder& order, const BodyState& car) {
   const double yaw = car.Yaw();
-  const double behind = uav.altitude / std::tan(pitch_down_deg * std::numbers::pi / 180.0);
+  const double behind = order.altitude / std::tan(order.pitch_down_deg * std::numbers::pi / 180.0);
   UavSetpoint setpoint;
-  setpoint.position = car.position + Eigen::Vector3d(-std::cos(yaw) * behind, -std::sin(yaw) * behind, uav.altitude);
+  setpoint.position = car.position + Eigen::Vector3d(-std::cos(yaw) * behind, -std::sin(yaw) * behind, order.altitude);
   // The offset behind the car turns with it, so its rate of change joins the car's velocity.
   const double yaw_rate = car.angular_velocity.z();
   setpoint.velocity = car.linear_velocity + Eigen::Vector3d(std::sin(yaw), -std::cos(yaw), 0.0) * behind * yaw_rate;
   setpoint.yaw = yaw;
   setpoint.yaw_rate = yaw_rate;
   return setpoint;
+}
+
+vehicles::QuadcopterCommand UavCommandFor(const UavOrder& order, const BodyState& uav, const State& state) {
+  using vehicles::QuadcopterCommand;
+  switch (order.mode) {
+    case UavOrder::Mode::kFollow:
+      if (const Agent* target = state.Find(order.target)) {
+        // The target's centripetal acceleration is fed forward so the UAV
+        // does not lag in bends.
+        const UavSetpoint station = FollowTarget(order, target->body);
+        const Eigen::Vector3d turn_acceleration =
+            target->body.angular_velocity.cross(target->body.linear_velocity);
+        return QuadcopterCommand::Hold(station.position, station.yaw, station.velocity, station.yaw_rate,
+                                       turn_acceleration);
+      }
+      return QuadcopterCommand::Hold(uav.position, uav.Yaw());
+    case UavOrder::Mode::kHold:
+      return QuadcopterCommand::Hold(order.position, order.yaw);
+    case UavOrder::Mode::kVelocity:
+      return QuadcopterCommand::Velocity(order.velocity, order.yaw_rate);
+  }
+  return QuadcopterCommand::Hold(uav.position, uav.Yaw());
 }
 
 }  // namespace sim4cv::sim

@@ -122,21 +122,21 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
   return scene;
 }
 
-Scene SceneFromMap(const std::string& map_path, const std::string& route_name, float car_speed, uint32_t camera_width,
-                   uint32_t camera_height) {
+Scene SceneFromMap(std::shared_ptr<const map::Map> loaded, const std::string& route_name, float car_speed,
+                   uint32_t camera_width, uint32_t camera_height) {
   SIM4CV_THROW_UNLESS(car_speed > 0, "car speed " << car_speed << " must be > 0");
   Scene scene;
-  auto loaded = std::make_shared<map::Map>(map::LoadMapFile(map_path));
   SIM4CV_THROW_UNLESS(loaded->objects.size() < 65535 - kFirstBuildingId,
-                      "map '" << map_path << "' has " << loaded->objects.size() << " objects; at most "
+                      "map '" << loaded->name << "' has " << loaded->objects.size() << " objects; at most "
                               << 65535 - kFirstBuildingId - 1 << " fit the instance ids");
   const map::Route* route = nullptr;
   for (const auto& candidate : loaded->routes) {
     if (route_name.empty() ? candidate.closed : candidate.name == route_name) route = &candidate;
     if (route) break;
   }
-  SIM4CV_THROW_UNLESS(route, "map '" << map_path << "' has no " << (route_name.empty() ? "closed route" : "route named '" + route_name + "'"));
-  SIM4CV_THROW_UNLESS(route->closed, "route '" << route->name << "' of map '" << map_path
+  SIM4CV_THROW_UNLESS(route, "map '" << loaded->name << "' has no "
+                                     << (route_name.empty() ? "closed route" : "route named '" + route_name + "'"));
+  SIM4CV_THROW_UNLESS(route->closed, "route '" << route->name << "' of map '" << loaded->name
                                                << "' is open; the target car needs a closed route");
   scene.name = loaded->name;
   scene.ground_half_size = static_cast<float>(loaded->HalfExtent().maxCoeff() + 50.0);
@@ -146,6 +146,12 @@ Scene SceneFromMap(const std::string& map_path, const std::string& route_name, f
   scene.car.cruise_speed = car_speed;
   AddStandardCameras(scene, camera_width, camera_height, 60.0f);
   return scene;
+}
+
+Scene SceneFromMap(const std::string& map_path, const std::string& route_name, float car_speed, uint32_t camera_width,
+                   uint32_t camera_height) {
+  return SceneFromMap(std::make_shared<const map::Map>(map::LoadMapFile(map_path)), route_name, car_speed, camera_width,
+                      camera_height);
 }
 
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height) {

@@ -42,7 +42,7 @@ struct UavSpec {
 
 struct CameraSpec {
   std::string name;
-  std::string mounted_on;  // entity name
+  std::string mounted_on;  // entity name; empty: fixed in the world, `offset` is its position
   uint32_t width = 320, height = 180;
   float fov_y_deg = 60.0f;
   float pitch_down_deg = 60.0f;  // below the horizon (gimbal) or below the body's x axis (fixed)
@@ -50,6 +50,7 @@ struct CameraSpec {
   // turns only with its yaw; false: rigidly fixed to the body.
   bool gimbal = true;
   Eigen::Vector3d offset{0.0, 0.0, -0.3};  // mount point in the body frame (x forward, y left, z up), m
+  float yaw_deg = 0.0f;  // fixed mounts: turned left of the body's x axis (a side or rear view)
 };
 
 struct Scene {
@@ -68,9 +69,6 @@ struct Scene {
   std::shared_ptr<const map::Map> map;
   std::shared_ptr<const map::RoadGraph> road_graph;
 
-  // The body state a camera is mounted on.
-  bool MountedOnCar(const CameraSpec& camera) const { return camera.mounted_on == car.name; }
-
   // Index of the camera called `name`, or -1.
   int FindCamera(const std::string& name) const;
 };
@@ -84,6 +82,10 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
 // follows it. Throws std::invalid_argument naming the file or route.
 Scene SceneFromMap(const std::string& map_path, const std::string& route_name, float car_speed, uint32_t camera_width,
                    uint32_t camera_height);
+
+// The same for a map already loaded (or parsed from a client's text).
+Scene SceneFromMap(std::shared_ptr<const map::Map> map, const std::string& route_name, float car_speed,
+                   uint32_t camera_width, uint32_t camera_height);
 
 // Reads and parses a scene file.
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height);

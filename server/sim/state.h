@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace sim4cv::sim {
@@ -19,13 +20,45 @@ struct BodyState {
   double Yaw() const;
 };
 
-// What the car's actuators are told. Either the waypoint follower writes it
+// What a car's actuators are told. Either its waypoint follower writes it
 // each physics step, or a client's Controls set it (manual == true).
 struct CarCommand {
   float steering = 0.0f;  // -1 (full left) .. +1 (full right)
   float throttle = 0.0f;  // 0 .. 1
   float brake = 0.0f;     // 0 .. 1
   bool manual = false;
+};
+
+// What a UAV's position-hold controller is asked to do.
+struct UavOrder {
+  enum class Mode : uint8_t {
+    kFollow,    // film `target`: hold station behind and above it (the camera UAV of the paper)
+    kHold,      // hold `position` with heading `yaw`
+    kVelocity,  // fly `velocity` (world frame) turning at `yaw_rate`
+  };
+  Mode mode = Mode::kFollow;
+  uint32_t target = 0;                                  // kFollow: entity id
+  double altitude = 15.0;                               // kFollow: m above the target
+  double pitch_down_deg = 60.0;                         // kFollow: the gimbal pitch that frames the target
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();   // kHold, m
+  double yaw = 0.0;                                     // kHold, rad
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   // kVelocity, m/s
+  double yaw_rate = 0.0;                                // kVelocity, rad/s
+};
+
+// Values of the protocol's EntityKind (sim4cv.proto).
+enum class AgentKind : uint8_t { kCar = 1, kUav = 2 };
+
+// One simulated vehicle: the scene's target car and camera UAV, and any a
+// client spawned. Its id is also its instance id in masks and boxes.
+struct Agent {
+  uint32_t id = 0;
+  AgentKind kind = AgentKind::kCar;
+  std::string name;
+  BodyState body;
+  CarCommand car_command;    // cars
+  float cruise_speed = 0.0f; // cars: the waypoint follower's set speed; 0 with no route
+  UavOrder uav_order;        // UAVs
 };
 
 // The latest box a client's tracker reported, as applied by the simulation.
@@ -40,10 +73,13 @@ struct State {
   uint64_t frame_id = 0;       // frames completed; frame N is rendered after N frame periods
   uint64_t physics_steps = 0;  // substeps taken since start
   double sim_time = 0.0;       // seconds
-  BodyState car;
-  BodyState uav;
-  CarCommand car_command;
+  std::vector<Agent> agents;   // ordered by id
   std::vector<TrackerReport> tracker_reports;  // one per client that reported, ordered by client id
+
+  // The agent with this id, or nullptr.
+  const Agent* Find(uint32_t id) const;
+  Agent* Find(uint32_t id);
+  const Agent* FindByName(const std::string& name) const;
 };
 
 }  // namespace sim4cv::sim

@@ -2,8 +2,10 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "server/common/check.h"
 #include "server/sim/controllers.h"
@@ -32,7 +34,26 @@ void Follow(const BodyState* logged, BodyState& body) {
   }
 }
 
+const char* KindName(AgentKind kind) { return kind == AgentKind::kCar ? "car" : "UAV"; }
+
 }  // namespace
+
+std::string AgentList(const State& state) {
+  std::ostringstream list;
+  for (const Agent& agent : state.agents) {
+    list << (&agent == &state.agents.front() ? "" : ", ") << agent.id << " ('" << agent.name << "', "
+         << KindName(agent.kind) << ")";
+  }
+  return state.agents.empty() ? "none" : list.str();
+}
+
+// The Bullet side of one agent, in the same order as State::agents.
+struct World::Vehicle {
+  uint32_t id = 0;
+  std::unique_ptr<vehicles::Car> car;
+  std::unique_ptr<vehicles::CarDriver> driver;  // null: no route, the car waits for Controls
+  std::unique_ptr<vehicles::Quadcopter> uav;
+};
 
 struct World::Bodies {
   btDefaultCollisionConfiguration collision_config;
@@ -42,9 +63,7 @@ struct World::Bodies {
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &collision_config};
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<btRigidBody>> statics;
-  std::unique_ptr<vehicles::Car> car;
-  std::unique_ptr<vehicles::CarDriver> driver;
-  std::unique_ptr<vehicles::Quadcopter> uav;
+  std::vector<Vehicle> vehicles;  // ordered by id, like State::agents
 
   void AddStatic(std::unique_ptr<btCollisionShape> shape, const btTransform& pose) {
     btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape.get());
@@ -56,8 +75,7 @@ struct World::Bodies {
   }
 
   ~Bodies() {
-    car.reset();  // vehicles remove their own bodies and actions
-    uav.reset();
+    vehicles.clear();  // vehicles remove their own bodies and actions
     for (auto& body : statics) world.removeRigidBody(body.get());
   }
 };
@@ -85,17 +103,22 @@ World::World(const Scene& scene)
     }
   }
 
+  // The scene's own agents: the target car on its lane and the camera UAV filming it.
   const Eigen::Vector2d start = car_lane_.PointAt(0.0);
   const Eigen::Vector2d tangent = car_lane_.TangentAt(0.0);
-  b.car = std::make_unique<vehicles::Car>(b.world, scene.car.params, start, std::atan2(tangent.y(), tangent.x()));
-  b.driver = std::make_unique<vehicles::CarDriver>(scene.car.params, vehicles::Polyline(car_lane_.points(), true),
-                                                   scene.car.cruise_speed);
-  BodyState car;
-  CopyState(b.car->State(), car);
-  const UavSetpoint station = FollowCar(scene.uav, scene.cameras.front().pitch_down_deg, car);
-  b.uav = std::make_unique<vehicles::Quadcopter>(b.world, scene.uav.params, station.position, station.yaw);
-  CopyState(b.car->State(), initial_state_.car);
-  CopyState(b.uav->State(), initial_state_.uav);
+  const double car_yaw = std::atan2(tangent.y(), tangent.x());
+  SIM4CV_DEMAND(Spawn(initial_state_, AgentKind::kCar, scene.car.name, {{start.x(), start.y(), 0.0}, car_yaw}) ==
+                kCarEntityId);
+  SetRoute(initial_state_, kCarEntityId, car_lane_.points(), true, scene.car.cruise_speed);
+  UavOrder follow;
+  follow.target = kCarEntityId;
+  follow.altitude = scene.uav.altitude;
+  const int uav_camera = scene.FindCamera("uav");
+  follow.pitch_down_deg = uav_camera >= 0 ? scene.cameras[uav_camera].pitch_down_deg : 60.0;
+  const UavSetpoint station = FollowTarget(follow, initial_state_.agents.front().body);
+  SIM4CV_DEMAND(Spawn(initial_state_, AgentKind::kUav, scene.uav.name, {station.position, station.yaw}) ==
+                kUavEntityId);
+  SetUavOrder(initial_state_, kUavEntityId, follow);
 }
 
 World::~World() = default;
@@ -103,6 +126,107 @@ World::~World() = default;
 State World::InitialState() const { return initial_state_; }
 
 void World::SetReplay(std::shared_ptr<const runlog::ReplayTrack> track) { replay_ = std::move(track); }
+
+uint32_t World::Spawn(State& state, AgentKind kind, const std::string& name, const SpawnPose& pose) {
+  SIM4CV_THROW_UNLESS(pose.position.allFinite() && std::isfinite(pose.yaw),
+                      "spawn pose (" << pose.position.transpose() << ", yaw " << pose.yaw << ") is not finite");
+  SIM4CV_THROW_UNLESS(kind != AgentKind::kUav || pose.position.z() > 0.5,
+                      "a UAV must spawn in the air; z is " << pose.position.z() << " m (at least 0.5)");
+  uint32_t id = 1;
+  for (const Agent& agent : state.agents) {  // ordered by id: the first gap is the lowest free id
+    if (agent.id != id) break;
+    ++id;
+  }
+  SIM4CV_THROW_UNLESS(id <= kMaxAgentId, "the world already holds " << kMaxAgentId << " agents, the most it can");
+  const std::string agent_name = name.empty() ? (kind == AgentKind::kCar ? "car_" : "uav_") + std::to_string(id) : name;
+  SIM4CV_THROW_UNLESS(!state.FindByName(agent_name), "an entity named '" << agent_name << "' already exists");
+
+  auto& b = *bodies_;
+  Vehicle vehicle;
+  vehicle.id = id;
+  Agent agent;
+  agent.id = id;
+  agent.kind = kind;
+  agent.name = agent_name;
+  if (kind == AgentKind::kCar) {
+    vehicle.car = std::make_unique<vehicles::Car>(b.world, scene_.car.params, pose.position.head<2>(), pose.yaw);
+    CopyState(vehicle.car->State(), agent.body);
+    agent.car_command = {0.0f, 0.0f, 1.0f, true};  // parked until told otherwise
+  } else {
+    vehicle.uav = std::make_unique<vehicles::Quadcopter>(b.world, scene_.uav.params, pose.position, pose.yaw);
+    CopyState(vehicle.uav->State(), agent.body);
+    agent.uav_order.mode = UavOrder::Mode::kHold;
+    agent.uav_order.position = pose.position;
+    agent.uav_order.yaw = pose.yaw;
+  }
+  const auto at = std::lower_bound(state.agents.begin(), state.agents.end(), id,
+                                   [](const Agent& a, uint32_t wanted) { return a.id < wanted; });
+  const auto index = at - state.agents.begin();
+  state.agents.insert(at, std::move(agent));
+  b.vehicles.insert(b.vehicles.begin() + index, std::move(vehicle));
+  return id;
+}
+
+World::Vehicle& World::VehicleOf(const State& state, uint32_t id, AgentKind kind, const char* what) {
+  const Agent* agent = state.Find(id);
+  SIM4CV_THROW_UNLESS(agent, what << ": no entity has id " << id << "; the world holds " << AgentList(state));
+  SIM4CV_THROW_UNLESS(agent->kind == kind, what << ": entity " << id << " ('" << agent->name << "') is a "
+                                                << KindName(agent->kind) << ", not a " << KindName(kind));
+  auto& vehicles = bodies_->vehicles;
+  const auto it = std::lower_bound(vehicles.begin(), vehicles.end(), id,
+                                   [](const Vehicle& v, uint32_t wanted) { return v.id < wanted; });
+  SIM4CV_DEMAND(it != vehicles.end() && it->id == id);
+  return *it;
+}
+
+void World::Remove(State& state, uint32_t id) {
+  const Agent* agent = state.Find(id);
+  SIM4CV_THROW_UNLESS(agent, "Remove: no entity has id " << id << "; the world holds " << AgentList(state));
+  VehicleOf(state, id, agent->kind, "Remove");
+  const auto index = agent - state.agents.data();
+  state.agents.erase(state.agents.begin() + index);
+  bodies_->vehicles.erase(bodies_->vehicles.begin() + index);
+  for (Agent& other : state.agents) {
+    if (other.kind == AgentKind::kUav && other.uav_order.mode == UavOrder::Mode::kFollow && other.uav_order.target == id) {
+      other.uav_order.mode = UavOrder::Mode::kHold;
+      other.uav_order.position = other.body.position;
+      other.uav_order.yaw = other.body.Yaw();
+    }
+  }
+}
+
+void World::SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed) {
+  Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetRoute");
+  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40,
+                      "route speed " << speed << " m/s is outside [0, 40]");
+  SIM4CV_THROW_UNLESS(path.size() >= 2, "a route needs at least 2 points; got " << path.size());
+  vehicle.driver = std::make_unique<vehicles::CarDriver>(scene_.car.params, vehicles::Polyline(std::move(path), closed),
+                                                         speed);
+  Agent& agent = *state.Find(id);
+  agent.cruise_speed = speed;
+  agent.car_command.manual = false;
+}
+
+void World::SetCruiseSpeed(State& state, uint32_t id, float speed) {
+  Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetSpeed");
+  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40, "speed " << speed << " m/s is outside [0, 40]");
+  SIM4CV_THROW_UNLESS(vehicle.driver, "car " << id << " has no route to drive at " << speed
+                                             << " m/s; give it one (SetRoute) or drive it with Controls");
+  vehicle.driver->set_speed(speed);
+  Agent& agent = *state.Find(id);
+  agent.cruise_speed = speed;
+  agent.car_command.manual = false;
+}
+
+void World::SetUavOrder(State& state, uint32_t id, const UavOrder& order) {
+  VehicleOf(state, id, AgentKind::kUav, "UavCommand");
+  if (order.mode == UavOrder::Mode::kFollow) {
+    const Agent* target = state.Find(order.target);
+    SIM4CV_THROW_UNLESS(target && order.target != id, "UAV " << id << " cannot follow entity " << order.target
+                                                             << "; the world holds " << AgentList(state));
+  }
+  state.Find(id)->uav_order = order;
+}
 
 void World::Step(State& state, double dt) {
   SIM4CV_DEMAND(dt > 0);
@@ -119,36 +243,40 @@ void World::FollowReplay(State& state) const {
   // Every substep of a frame looks up the same pose; the frame id is counted
   // by the caller after the frame's last substep.
   const uint64_t frame_id = state.frame_id + 1;
-  Follow(replay_->Find(frame_id, kCarEntityId), state.car);
-  Follow(replay_->Find(frame_id, kUavEntityId), state.uav);
+  for (Agent& agent : state.agents) Follow(replay_->Find(frame_id, agent.id), agent.body);
 }
 
 void World::StepPhysics(State& state, double dt) {
   auto& b = *bodies_;
-  vehicles::CarControls controls;
-  if (state.car_command.manual) {
-    controls = {state.car_command.steering, state.car_command.throttle, state.car_command.brake, false};
-  } else {
-    controls = b.driver->Update(b.car->State(), dt);
-    state.car_command = {static_cast<float>(controls.steering), static_cast<float>(controls.throttle),
-                         static_cast<float>(controls.brake), false};
+  SIM4CV_DEMAND(b.vehicles.size() == state.agents.size());
+  for (std::size_t i = 0; i < state.agents.size(); ++i) {
+    Agent& agent = state.agents[i];
+    Vehicle& vehicle = b.vehicles[i];
+    SIM4CV_ASSERT(vehicle.id == agent.id);
+    if (vehicle.car) {
+      vehicles::CarControls controls;
+      if (agent.car_command.manual || !vehicle.driver) {
+        const CarCommand& c = agent.car_command;
+        controls = {c.steering, c.throttle, c.brake, false};
+      } else {
+        controls = vehicle.driver->Update(vehicle.car->State(), dt);
+        agent.car_command = {static_cast<float>(controls.steering), static_cast<float>(controls.throttle),
+                             static_cast<float>(controls.brake), false};
+      }
+      vehicle.car->SetControls(controls);
+      vehicle.car->Update(dt);
+    } else {
+      vehicle.uav->SetCommand(UavCommandFor(agent.uav_order, agent.body, state));
+      vehicle.uav->Update(dt);
+    }
   }
-  b.car->SetControls(controls);
-  b.car->Update(dt);
-
-  // The camera UAV holds station behind and above the car; the car's
-  // centripetal acceleration is fed forward so it does not lag in bends.
-  const UavSetpoint station = FollowCar(scene_.uav, scene_.cameras.front().pitch_down_deg, state.car);
-  const Eigen::Vector3d turn_acceleration = state.car.angular_velocity.cross(state.car.linear_velocity);
-  b.uav->SetCommand(vehicles::QuadcopterCommand::Hold(station.position, station.yaw, station.velocity,
-                                                      station.yaw_rate, turn_acceleration));
-  b.uav->Update(dt);
-
   // maxSubSteps = 0: exactly one step of dt, no interpolation, so the result
   // depends only on the state and never on wall time.
   b.world.stepSimulation(dt, 0);
-  CopyState(b.car->State(), state.car);
-  CopyState(b.uav->State(), state.uav);
+  for (std::size_t i = 0; i < state.agents.size(); ++i) {
+    const Vehicle& vehicle = b.vehicles[i];
+    CopyState(vehicle.car ? vehicle.car->State() : vehicle.uav->State(), state.agents[i].body);
+  }
 }
 
 }  // namespace sim4cv::sim

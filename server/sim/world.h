@@ -1,14 +1,18 @@
 // The Bullet world: the only code that touches Bullet. Per physics step it
-// turns the State's commands into the vehicles' actuator inputs, steps the
-// world once, and writes the bodies' poses and velocities back into State.
+// turns each agent's command in State into its vehicle's actuator inputs,
+// steps the world once, and writes the bodies' poses and velocities back
+// into State.
 //
 // Unlike a pure mjData, the vehicles keep some step-to-step state of their own
 // (the wheels' steering angle, the controllers' integrators, Bullet's contact
 // cache); State holds everything observable. Two Worlds built from the same
-// Scene and stepped with the same commands produce bit-identical States.
+// Scene, configured and stepped the same way, produce bit-identical States.
 #pragma once
 
 #include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "server/sim/closed_path.h"
 #include "server/sim/scene.h"
@@ -20,6 +24,16 @@ class ReplayTrack;
 
 namespace sim4cv::sim {
 
+// Agents take ids below the first static object's (kFirstBuildingId), so the
+// mask's instance ids stay unique: at most this many at once.
+inline constexpr uint32_t kMaxAgentId = kFirstBuildingId - 1;
+
+// Where to place a new agent: on the ground (cars) or in the air (UAVs).
+struct SpawnPose {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m; cars ignore z (they stand on the ground)
+  double yaw = 0.0;                                    // rad, counter-clockwise from east
+};
+
 class World {
  public:
   // `scene` must outlive the World.
@@ -28,33 +42,56 @@ class World {
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
-  // The state at time zero: car at the start of its lane, UAV on station.
+  // The state at time zero: the scene's car at the start of its lane, its
+  // camera UAV on station behind it.
   State InitialState() const;
 
   // Advances `state` by one physics step of `dt` seconds. Deterministic.
   void Step(State& state, double dt);
 
+  // Configuration, between steps (the sim thread). Each throws
+  // std::invalid_argument naming the offending value and changes nothing then.
+  //
+  // A new car at rest, its brake on until it gets Controls or a route; a new
+  // UAV hovering. `name` must be unique (empty: "car_<id>" / "uav_<id>").
+  // Returns the new agent's id: the lowest free one.
+  uint32_t Spawn(State& state, AgentKind kind, const std::string& name, const SpawnPose& pose);
+  // Removes an agent; UAVs that followed it hold their position instead.
+  void Remove(State& state, uint32_t id);
+  // The car's waypoint follower drives `path` (a closed loop or an open
+  // path, where it stops at the end) at `speed` m/s; speed 0 stops it there.
+  void SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed);
+  // Only the set speed of a car that already has a route.
+  void SetCruiseSpeed(State& state, uint32_t id, float speed);
+  // What a UAV's controller holds from now on.
+  void SetUavOrder(State& state, uint32_t id, const UavOrder& order);
+
   // Replay (docs/logs.md): from now on Step moves no body by physics; it
-  // copies into State the car's and the UAV's logged poses and velocities of
-  // the frame being stepped to (state.frame_id + 1). A frame the log does not
-  // hold (past its end, or a gap) keeps the previous pose at rest. Bullet is
-  // not stepped: nothing else in the world moves, and rendering reads State.
+  // copies into State each agent's logged pose and velocity of the frame
+  // being stepped to (state.frame_id + 1). A frame the log does not hold
+  // (past its end, or a gap) keeps the previous pose at rest. Bullet is not
+  // stepped: nothing else in the world moves, and rendering reads State.
   void SetReplay(std::shared_ptr<const runlog::ReplayTrack> track);
 
-  // The lane the car's waypoint follower drives (right lane of the road loop).
+  // The lane the scene's target car drives (right lane of its road loop).
   const ClosedPath& car_lane() const { return car_lane_; }
 
  private:
   struct Bodies;
+  struct Vehicle;
 
+  Vehicle& VehicleOf(const State& state, uint32_t id, AgentKind kind, const char* what);
   void StepPhysics(State& state, double dt);
   void FollowReplay(State& state) const;
 
   const Scene& scene_;
   ClosedPath car_lane_;
   std::unique_ptr<Bodies> bodies_;
-  State initial_state_;  // taken when the bodies were spawned
+  State initial_state_;  // taken when the scene's bodies were spawned
   std::shared_ptr<const runlog::ReplayTrack> replay_;
 };
+
+// The ids of a State's agents, as "1 ('car'), 2 ('uav')": for Error messages.
+std::string AgentList(const State& state);
 
 }  // namespace sim4cv::sim

@@ -25,18 +25,15 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 class NullLink : public ClientLink {
  public:
   void OfferFrame(const FrameRef& frame) override { offered.push_back(frame->frame_id); }
+  void OfferReply(proto::Envelope reply) override { replies.push_back(std::move(reply)); }
   std::vector<uint64_t> offered;
+  std::vector<proto::Envelope> replies;
 };
 
-proto::Welcome MakeWelcome(const sim::Scene& scene, proto::SimMode mode) {
+proto::Welcome MakeWelcome(proto::SimMode mode) {
   proto::Welcome welcome;
   welcome.set_protocol_version(wire::kProtocolVersion);
   welcome.set_server_version("test");
-  welcome.set_scene_name(scene.name);
-  proto::CameraInfo* camera = welcome.add_cameras();
-  camera->set_name(scene.cameras[0].name);
-  camera->set_width(scene.cameras[0].width);
-  camera->set_height(scene.cameras[0].height);
   welcome.set_mode(mode);
   welcome.set_physics_hz(240);
   welcome.set_frame_hz(30);
@@ -98,8 +95,17 @@ proto::Envelope GetState() {
 class ClientProtocolTest : public ::testing::Test {
  protected:
   explicit ClientProtocolTest(proto::SimMode mode = proto::SIM_MODE_LOCKSTEP)
-      : context_{scene_, mode, MakeWelcome(scene_, mode), commands_, latest_state_, 1u << 20, counters_},
-        protocol_(kClient, context_, link_, mailbox_) {}
+      : context_{scene_, mode, MakeWelcome(mode), world_, commands_, latest_state_, 1u << 20, counters_},
+        protocol_(kClient, context_, link_, mailbox_) {
+    // What the sim thread publishes: here only the scene's first camera.
+    proto::WorldInfo world;
+    world.set_scene_name(scene_.name);
+    proto::CameraInfo* camera = world.add_cameras();
+    camera->set_name(scene_.cameras[0].name);
+    camera->set_width(scene_.cameras[0].width);
+    camera->set_height(scene_.cameras[0].height);
+    world_.Publish(world);
+  }
 
   Outcome Send(const proto::Envelope& request) { return protocol_.Handle(request, reply_); }
 
@@ -131,6 +137,7 @@ class ClientProtocolTest : public ::testing::Test {
   }
 
   const sim::Scene scene_ = sim::DefaultScene(320, 180);
+  WorldDirectory world_;
   CommandQueue commands_;
   StatePool state_pool_;  // outlives latest_state_'s ref
   LatestState latest_state_;
@@ -390,12 +397,17 @@ TEST_F(ClientProtocolTest, OnFrameSentNeverUnderflows) {
 
 // ---- Controls ------------------------------------------------------------
 
-TEST_F(ClientProtocolTest, ControlsForAnUnknownEntityAreRefused) {
+// Entities come and go (Configure), so only the sim thread can tell whether
+// an id is a car: the command carries the link it answers an Error through
+// (tests/integration/bad_input_test.cpp checks that answer).
+TEST_F(ClientProtocolTest, ControlsForAnyEntityGoToTheSimThreadWithTheLink) {
   Handshake();
-  ExpectError(Send(Controls(sim::kUavEntityId, 0, 0, 0)), proto::ERROR_CODE_UNKNOWN_ENTITY, false,
-              {"Controls.entity_id 2 is not a car", "1 ('car')"});
-  ExpectError(Send(Controls(0, 0, 0, 0)), proto::ERROR_CODE_UNKNOWN_ENTITY, false, {"entity_id 0"});
-  ExpectError(Send(Controls(100, 0, 0, 0)), proto::ERROR_CODE_UNKNOWN_ENTITY, false, {"entity_id 100"});
+  EXPECT_EQ(Send(Controls(100, 0, 0, 0)), Outcome::kNoReply);
+  const std::vector<Command> posted = Drain();
+  ASSERT_EQ(posted.size(), 1u);
+  const auto& controls = std::get<ControlsCommand>(posted[0].body);
+  EXPECT_EQ(controls.entity_id, 100u);
+  EXPECT_EQ(controls.link, link_);
 }
 
 TEST_F(ClientProtocolTest, ControlsOutOfRangeNameTheField) {

@@ -14,6 +14,13 @@ namespace {
 using Eigen::Vector3d;
 constexpr double kPi = std::numbers::pi;
 
+UavSetpoint FollowCar(const UavSpec& uav, double pitch_down_deg, const BodyState& car) {
+  UavOrder order;
+  order.altitude = uav.altitude;
+  order.pitch_down_deg = pitch_down_deg;
+  return FollowTarget(order, car);
+}
+
 BodyState Car(double x, double y, double yaw, double speed) {
   BodyState body;
   body.position = {x, y, 0.75};

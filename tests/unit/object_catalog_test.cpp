@@ -11,6 +11,7 @@
 #include "server/render/camera_math.h"
 #include "server/render/mesh_builder.h"
 #include "server/render/scene_graphics.h"
+#include "server/sim/world.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/no_warnings.h"
 
@@ -49,23 +50,33 @@ class ObjectCatalogTest : public ::testing::Test {
     catalog_.AddStatic(120, kBuildingClass, StandingBox({1, 2, 3}), PoseMatrix({-20, 0, 0}, {1, 0, 0, 0}));
     catalog_.AddStatic(110, kBuildingClass, StandingBox({1, 2, 3}), PoseMatrix({30, 5, -3}, quarter));
     catalog_.AddStatic(100, kBuildingClass, StandingBox({1, 2, 3}), PoseMatrix({20, 0, -1}, {1, 0, 0, 0}));
-    catalog_.AddBody(2, kUavClass, ObjectCatalog::Source::kUav, {0.3, 0.3, 0.05});
-    catalog_.AddBody(1, kCarClass, ObjectCatalog::Source::kCar, {2.25, 0.9, 0.6});
-    state_.car.position = {10, 1, 0};
-    state_.car.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
-    state_.car.linear_velocity = {5, 1, 0};
-    state_.car.angular_velocity = {0, 0, 0.2};
-    state_.uav.position = {0, 0, 5};  // straight above the camera: out of view
+    // The moving objects, ordered by id as SceneGraphics lists them.
+    MovingObject car;
+    car.instance = 1;
+    car.object_class = kCarClass;
+    car.position = {10, 1, 0};
+    car.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+    car.linear_velocity = {5, 1, 0};
+    car.angular_velocity = {0, 0, 0.2};
+    car.half_extents = {2.25, 0.9, 0.6};
+    MovingObject uav;
+    uav.instance = 2;
+    uav.object_class = kUavClass;
+    uav.position = {0, 0, 5};  // straight above the camera: out of view
+    uav.half_extents = {0.3, 0.3, 0.05};
+    moving_ = {car, uav};
   }
 
+  MovingObject& car() { return moving_[0]; }
+
   ObjectCatalog catalog_;
-  sim::State state_;
+  std::vector<MovingObject> moving_;
 };
 
 TEST_F(ObjectCatalogTest, StaticBoxIsCentredOnItsMeshNotOnItsOrigin) {
   std::vector<ObjectGroundTruth> out;
-  catalog_.Fill(state_, ForwardCamera(), {}, out);
-  ASSERT_EQ(catalog_.size(), 5u);
+  catalog_.Fill(moving_, ForwardCamera(), {}, out);
+  ASSERT_EQ(catalog_.size(), 3u) << "the static objects";
   ASSERT_GE(out.size(), 2u);
   const ObjectGroundTruth& building = out[1];
   ASSERT_EQ(building.instance, 100);
@@ -84,29 +95,30 @@ TEST_F(ObjectCatalogTest, StaticBoxIsCentredOnItsMeshNotOnItsOrigin) {
               0.0, 1e-6);
 }
 
-TEST_F(ObjectCatalogTest, BodiesFollowState) {
+TEST_F(ObjectCatalogTest, MovingObjectsAreListedAsGiven) {
   std::vector<ObjectGroundTruth> out;
-  catalog_.Fill(state_, ForwardCamera(), {}, out);
+  catalog_.Fill(moving_, ForwardCamera(), {}, out);
   ASSERT_FALSE(out.empty());
-  const ObjectGroundTruth& car = out[0];
-  ASSERT_EQ(car.instance, 1);
-  EXPECT_EQ(car.object_class, kCarClass);
-  EXPECT_EQ(car.position, state_.car.position);
-  EXPECT_TRUE(car.orientation.isApprox(state_.car.orientation));
-  EXPECT_EQ(car.linear_velocity, state_.car.linear_velocity);
-  EXPECT_EQ(car.angular_velocity, state_.car.angular_velocity);
-  EXPECT_EQ(car.half_extents, Eigen::Vector3d(2.25, 0.9, 0.6));
-  EXPECT_EQ(car.projected_box.x, ForwardCamera().Project(car.position, car.orientation, car.half_extents).x);
+  const ObjectGroundTruth& listed = out[0];
+  ASSERT_EQ(listed.instance, 1);
+  EXPECT_EQ(listed.object_class, kCarClass);
+  EXPECT_EQ(listed.position, car().position);
+  EXPECT_TRUE(listed.orientation.isApprox(car().orientation));
+  EXPECT_EQ(listed.linear_velocity, car().linear_velocity);
+  EXPECT_EQ(listed.angular_velocity, car().angular_velocity);
+  EXPECT_EQ(listed.half_extents, Eigen::Vector3d(2.25, 0.9, 0.6));
+  EXPECT_EQ(listed.projected_box.x,
+            ForwardCamera().Project(listed.position, listed.orientation, listed.half_extents).x);
 
-  state_.car.position.x() = 40;
-  catalog_.Fill(state_, ForwardCamera(), {}, out);
+  car().position.x() = 40;
+  catalog_.Fill(moving_, ForwardCamera(), {}, out);
   EXPECT_EQ(out[0].position.x(), 40);
 }
 
 TEST_F(ObjectCatalogTest, ListsObjectsInViewVisibleOrNotOrderedById) {
   std::vector<ObjectGroundTruth> out;
   const std::vector<GroundTruthBox> visible = {VisibleBox(1), VisibleBox(110)};
-  catalog_.Fill(state_, ForwardCamera(), visible, out);
+  catalog_.Fill(moving_, ForwardCamera(), visible, out);
   // The UAV (above) and building 120 (behind) are out of view.
   ASSERT_EQ(out.size(), 3u);
   EXPECT_EQ(out[0].instance, 1);
@@ -121,7 +133,7 @@ TEST_F(ObjectCatalogTest, ListsObjectsInViewVisibleOrNotOrderedById) {
 TEST_F(ObjectCatalogTest, ObjectWithAVisibleBoxIsListedEvenIfItsProjectionIsEmpty) {
   // Cannot happen with consistent inputs; the visible box still wins.
   std::vector<ObjectGroundTruth> out;
-  catalog_.Fill(state_, ForwardCamera(), std::vector<GroundTruthBox>{VisibleBox(120)}, out);
+  catalog_.Fill(moving_, ForwardCamera(), std::vector<GroundTruthBox>{VisibleBox(120)}, out);
   ASSERT_FALSE(out.empty());
   EXPECT_EQ(out.back().instance, 120);
   EXPECT_TRUE(out.back().has_visible_box);
@@ -129,7 +141,8 @@ TEST_F(ObjectCatalogTest, ObjectWithAVisibleBoxIsListedEvenIfItsProjectionIsEmpt
 }
 
 TEST_F(ObjectCatalogTest, LabellingAnIdTwiceThrows) {
-  EXPECT_THROW(catalog_.AddBody(1, kCarClass, ObjectCatalog::Source::kCar, {1, 1, 1}), std::invalid_argument);
+  EXPECT_THROW(catalog_.AddStatic(100, kBuildingClass, StandingBox({1, 1, 1}), Eigen::Matrix4f::Identity()),
+               std::invalid_argument);
   EXPECT_THROW(catalog_.AddStatic(130, kBuildingClass, Mesh{}, Eigen::Matrix4f::Identity()), std::invalid_argument);
 }
 
@@ -137,11 +150,11 @@ TEST_F(ObjectCatalogTest, WarmFillAllocatesNothing) {
   std::vector<ObjectGroundTruth> out;
   const std::vector<GroundTruthBox> visible = {VisibleBox(1), VisibleBox(100)};
   const BoxProjector camera = ForwardCamera();
-  catalog_.Fill(state_, camera, visible, out);  // warms `out` up
+  catalog_.Fill(moving_, camera, visible, out);  // warms `out` up
   EXPECT_EQ(testing::AllocationsIn([&] {
               for (int frame = 0; frame < 100; ++frame) {
-                state_.car.position.x() = 5.0 + frame * 0.1;
-                catalog_.Fill(state_, camera, visible, out);
+                car().position.x() = 5.0 + frame * 0.1;
+                catalog_.Fill(moving_, camera, visible, out);
               }
             }),
             0u);
@@ -150,11 +163,14 @@ TEST_F(ObjectCatalogTest, WarmFillAllocatesNothing) {
 TEST(SceneGraphicsCatalog, DefaultSceneLabelsTheSameObjectsItDraws) {
   const sim::Scene scene = sim::DefaultScene(320, 180);
   SceneGraphics graphics(scene);
-  ASSERT_EQ(graphics.catalog().size(), graphics.labelled_objects().size());
+  const sim::World world(scene);
+  graphics.Update(world.InitialState());
+  ASSERT_EQ(graphics.catalog().size() + graphics.moving_objects().size(), graphics.labelled_objects().size());
+  ASSERT_EQ(graphics.moving_objects().size(), 2u) << "the car and the UAV";
   std::vector<ObjectGroundTruth> out;
   CameraView overhead;  // 300 m above the middle, looking down: sees everything
   overhead.world_from_camera = LookAt({0, 0, 300}, {0, 0, 0}, {0, 1, 0});
-  graphics.catalog().Fill(sim::State{}, BoxProjector(overhead), {}, out);
+  graphics.catalog().Fill(graphics.moving_objects(), BoxProjector(overhead), {}, out);
   ASSERT_EQ(out.size(), graphics.labelled_objects().size());
   for (std::size_t i = 0; i < scene.buildings.size(); ++i) {
     const sim::BuildingSpec& b = scene.buildings[i];

@@ -19,7 +19,9 @@ class RecordingLink : public ClientLink {
     frames.push_back(frame->frame_id);
     if (log_) log_->emplace_back(tag_, frame->frame_id);
   }
+  void OfferReply(proto::Envelope reply) override { replies.push_back(std::move(reply)); }
   std::vector<uint64_t> frames;
+  std::vector<proto::Envelope> replies;
 
  private:
   int tag_;
@@ -203,6 +205,7 @@ TEST_F(SchedulerTest, DeliverSharesOneFrameWithoutCopying) {
   // refs here) it goes back to the pool.
   struct AddressLink : ClientLink {
     void OfferFrame(const FrameRef& frame) override { addresses.push_back(&*frame); }
+    void OfferReply(proto::Envelope) override {}  // the scheduler never answers
     std::vector<const Frame*> addresses;
   };
   auto a = std::make_shared<AddressLink>();

@@ -37,3 +37,7 @@ target_compile_definitions(logdraw_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOU
 add_dependencies(logdraw_test sim4cv_logdraw)  # the test runs the tool
 sim4cv_test(unit projection_test sim4cv_render)
 sim4cv_test(unit object_catalog_test sim4cv_daemon)
+sim4cv_test(unit tcp_reply_test sim4cv_transport sim4cv_client)
+sim4cv_test(unit udp_reply_test sim4cv_transport sim4cv_client)
+sim4cv_test(unit shm_reply_path_test sim4cv_transport sim4cv_client)
+sim4cv_test(unit traffic_step_test sim4cv_traffic)

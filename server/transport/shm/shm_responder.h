@@ -1,7 +1,9 @@
 // The daemon's end of the response area: one entry per shared-memory client
 // (assigned on its first message, freed when it expires), each a small ring
 // of the replies ClientProtocol produced for it (Welcome, Subscribed, State,
-// Stats, Error), written under a per-message seqlock. Transport thread only.
+// Stats, Error) or the sim thread offered it, written under a per-message
+// seqlock. Assign and Free: the shm thread only. Write: any thread, but one
+// writer per entry at a time (the entry's ShmClientLink sees to that).
 #pragma once
 
 #include <cstdint>

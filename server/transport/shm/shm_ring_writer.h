@@ -19,6 +19,10 @@ class ShmRingWriter : public session::ClientLink {
   void OfferFrame(const session::FrameRef& frame) override;
   // The same for a Frame not from a pool (tests).
   void Write(const session::Frame& frame);
+  // Nothing to do: the ring is a subscriber, not a client, so no request of
+  // its own can be answered. Shared-memory clients are answered through
+  // their own links (ShmClientLink).
+  void OfferReply(proto::Envelope) override {}
 
   // Marks the ring closed and wakes every waiting reader (after the last frame).
   void Close();

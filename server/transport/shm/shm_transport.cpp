@@ -1,8 +1,9 @@
 // The shared-memory Transport: the frame ring's writer (called by the sim
 // thread) plus one "shm" thread that drains the reply ring, runs each client
 // token's messages through its own ClientProtocol exactly as TCP does, writes
-// the replies into the client's response entry, and disconnects clients that
-// have been silent for --shm-expiry-ms.
+// the replies into the client's response entry (through the session's
+// ShmClientLink, which the sim thread answers through as well), and
+// disconnects clients that have been silent for --shm-expiry-ms.
 #include "server/transport/shm/shm_transport.h"
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 
 #include "server/common/log.h"
 #include "server/session/client_protocol.h"
+#include "server/transport/shm/shm_client_link.h"
 #include "server/transport/shm/shm_reply_reader.h"
 #include "server/transport/shm/shm_responder.h"
 #include "server/transport/shm/shm_ring_writer.h"
@@ -23,23 +25,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using Outcome = session::ClientProtocol::Outcome;
 
-// A shm client's subscription gets its frames through the ring, so its link
-// only counts them: each is one "frame sent" for the lockstep Step limit.
-class CountingLink : public session::ClientLink {
- public:
-  void OfferFrame(const session::FrameRef&) override { offered_.fetch_add(1, std::memory_order_relaxed); }
-  uint64_t Take() { return offered_.exchange(0, std::memory_order_relaxed); }
-
- private:
-  std::atomic<uint64_t> offered_{0};
-};
-
 struct ShmSession {
   int entry = -1;  // response-area entry
   Clock::time_point last_heard;
   // One "connection": replaced after a fatal Error, like a TCP reconnect.
   session::ClientId id = 0;
-  std::shared_ptr<CountingLink> link;
+  std::shared_ptr<ShmClientLink> link;
   session::FrameMailbox mailbox;  // unused: ClientProtocol needs one
   std::unique_ptr<session::ClientProtocol> protocol;
   bool welcomed = false;
@@ -52,7 +43,9 @@ ShmRegionParams RegionParams(const ShmOptions& o) {
 class ShmTransport : public Transport {
  public:
   explicit ShmTransport(const ShmOptions& options)
-      : options_(options), region_(std::make_shared<ShmRegion>(RegionParams(options))), responder_(region_) {}
+      : options_(options),
+        region_(std::make_shared<ShmRegion>(RegionParams(options))),
+        responder_(std::make_shared<ShmResponder>(region_)) {}
 
   ~ShmTransport() override { Stop(); }
 
@@ -94,12 +87,13 @@ class ShmTransport : public Transport {
       thread_.join();
     }
     for (auto& [token, s] : sessions_) {
+      if (s->link) s->link->Close();
       if (s->protocol) s->protocol->Disconnect();
     }
     sessions_.clear();
     if (context_) context_->commands.Post({writer_id_, session::DisconnectCommand{}});
     if (writer_) writer_->Close();
-    responder_.WakeAll();
+    responder_->WakeAll();
     region_->Unlink();
   }
 
@@ -113,6 +107,7 @@ class ShmTransport : public Transport {
       ShmReplyReader::Message message;
       ShmReplyReader::Result result;
       while ((result = reader_->Next(message, now)) == ShmReplyReader::Result::kMessage) Handle(message, now);
+      if (links_closed_.exchange(false)) EndSessionsClosedBySim();
       ExpireSilent(now);
       if (stopping_) break;
       reader_->Wait(seen, result == ShmReplyReader::Result::kStalled ? std::chrono::milliseconds(1) : idle_wait);
@@ -122,7 +117,7 @@ class ShmTransport : public Transport {
   void Handle(const ShmReplyReader::Message& message, Clock::time_point now) {
     auto it = sessions_.find(message.token);
     if (it == sessions_.end()) {
-      const int entry = responder_.Assign(message.token);
+      const int entry = responder_->Assign(message.token);
       if (entry < 0) {
         context_->counters.Add("shm.refused");
         LOG_INFO("shared-memory message from a new client refused: all " << options_.max_clients
@@ -134,16 +129,19 @@ class ShmTransport : public Transport {
     }
     ShmSession& s = *it->second;
     s.last_heard = now;
+    // A fatal Error from the sim thread ended the session: this message starts the next one.
+    if (s.protocol && s.link->closed()) EndSession(s, s.link->fatal_message());
     if (!s.protocol) {
       s.id = session::NewClientId();
-      s.link = std::make_shared<CountingLink>();
+      s.link = std::make_shared<ShmClientLink>(responder_, s.entry, context_->counters, [this] { OnLinkClosed(); });
       s.protocol = std::make_unique<session::ClientProtocol>(s.id, *context_, s.link, s.mailbox);
       s.welcomed = false;
       LOG_INFO("client " << s.id << " connected over shared memory " << options_.name);
     }
     // Frames the ring received for this client since its last message; more
     // than the Step limit cannot matter.
-    const uint64_t delivered = std::min<uint64_t>(s.link->Take(), session::FrameMailbox::kMaxLockstepBacklog);
+    const uint64_t delivered =
+        std::min<uint64_t>(s.link->TakeFramesOffered(), session::FrameMailbox::kMaxLockstepBacklog);
     for (uint64_t n = 0; n < delivered; ++n) s.protocol->OnFrameSent();
 
     Outcome outcome;
@@ -165,20 +163,29 @@ class ShmTransport : public Transport {
       if (reply_.has_welcome()) s.welcomed = true;
     }
     if (outcome == Outcome::kNoReply) return;
-    if (!responder_.Write(s.entry, reply_)) {
-      context_->counters.Add("shm.responses_too_large");
-      const std::size_t size = reply_.ByteSizeLong();
-      session::ClientProtocol::Refuse(proto::ERROR_CODE_INVALID_STATE,
-                                      "the reply is " + std::to_string(size) + " bytes, more than the " +
-                                          std::to_string(shm::kShmResponseDataBytes) +
-                                          " a shared-memory response holds; ask for it over TCP",
-                                      false, reply_);
-      responder_.Write(s.entry, reply_);
-    }
-    if (outcome == Outcome::kReplyAndClose) {
-      LOG_INFO("client " << s.id << " refused: " << reply_.error().message());
-      s.protocol->Disconnect();
-      s.protocol.reset();  // its next message starts a new session, which must begin with Hello
+    s.link->Reply(reply_);
+    if (outcome == Outcome::kReplyAndClose) EndSession(s, reply_.error().message());
+  }
+
+  // After a fatal Error (from ClientProtocol or the sim thread): the client's
+  // next message starts a new session, which must begin with Hello.
+  void EndSession(ShmSession& s, const std::string& error) {
+    LOG_INFO("client " << s.id << " refused: " << error);
+    s.link->Close();
+    s.protocol->Disconnect();
+    s.protocol.reset();
+  }
+
+  // Sim thread (ShmClientLink::OfferReply sent a fatal Error): the shm thread
+  // ends that session on its next turn, without waiting for a message.
+  void OnLinkClosed() {
+    links_closed_ = true;
+    reader_->Wake();
+  }
+
+  void EndSessionsClosedBySim() {
+    for (auto& [token, s] : sessions_) {
+      if (s->protocol && s->link->closed()) EndSession(*s, s->link->fatal_message());
     }
   }
 
@@ -195,15 +202,16 @@ class ShmTransport : public Transport {
                            << " ms (--shm-expiry-ms); disconnected");
         s.protocol->Disconnect();
       }
+      if (s.link) s.link->Close();  // before the entry can go to another client
       context_->counters.Add("shm.clients_expired");
-      responder_.Free(s.entry);
+      responder_->Free(s.entry);
       it = sessions_.erase(it);
     }
   }
 
   ShmOptions options_;
   std::shared_ptr<ShmRegion> region_;
-  ShmResponder responder_;
+  std::shared_ptr<ShmResponder> responder_;  // shared with the sessions' links
   std::shared_ptr<ShmRingWriter> writer_;
   std::unique_ptr<ShmReplyReader> reader_;
   const session::ServerContext* context_ = nullptr;
@@ -212,6 +220,7 @@ class ShmTransport : public Transport {
   proto::Envelope request_, reply_;
   std::thread thread_;
   std::atomic<bool> stopping_{false};
+  std::atomic<bool> links_closed_{false};  // a link closed itself (OnLinkClosed)
   bool stopped_ = false;
 };
 

@@ -36,6 +36,7 @@ void TcpSession::ReadPrefix() {
       self->Close();
       return;
     }
+    if (self->close_after_writes_) return;  // a fatal Error is on its way out: read no more
     const uint32_t size = wire::DecodeLengthPrefix(self->prefix_);
     if (size > self->context_.max_message_bytes) {
       self->Reply(session::ClientProtocol::Refuse(
@@ -58,6 +59,7 @@ void TcpSession::ReadBody(uint32_t size) {
       self->Close();
       return;
     }
+    if (self->close_after_writes_) return;  // a fatal Error is on its way out: answer no more
     self->HandleRequest();
   });
 }
@@ -76,14 +78,20 @@ void TcpSession::HandleRequest() {
 void TcpSession::Reply(Outcome outcome) {
   if (outcome != Outcome::kNoReply) QueueEnvelope(reply_);
   if (outcome == Outcome::kReplyAndClose) {
-    LOG_INFO("client " << client_ << " refused: " << reply_.error().message());
-    close_after_writes_ = true;  // stop reading; close once the Error is out
-    closed_for_frames_ = true;
+    CloseAfterWrites(reply_);
     PumpWrites();
     return;
   }
   PumpWrites();
   ReadPrefix();
+}
+
+// After a fatal Error, from ClientProtocol or the sim thread: stop reading,
+// send nothing more, close once the Error is out.
+void TcpSession::CloseAfterWrites(const proto::Envelope& error) {
+  LOG_INFO("client " << client_ << " refused: " << error.error().message());
+  close_after_writes_ = true;
+  closing_ = true;
 }
 
 void TcpSession::QueueEnvelope(const proto::Envelope& envelope) {
@@ -95,9 +103,19 @@ void TcpSession::QueueEnvelope(const proto::Envelope& envelope) {
 }
 
 void TcpSession::OfferFrame(const session::FrameRef& frame) {
-  if (closed_for_frames_) return;
+  if (closing_) return;
   mailbox_.Offer(frame);
-  // One pending wake-up is enough however many frames arrive before it runs.
+  WakeWriter();
+}
+
+void TcpSession::OfferReply(proto::Envelope reply) {
+  if (closing_) return;  // nobody left to answer
+  offered_replies_.Offer(std::move(reply));
+  WakeWriter();
+}
+
+// Sim thread. One pending wake-up is enough however many offers arrive before it runs.
+void TcpSession::WakeWriter() {
   if (!pump_posted_.exchange(true)) {
     asio::post(socket_.get_executor(), [self = shared_from_this()] {
       self->pump_posted_ = false;
@@ -106,28 +124,41 @@ void TcpSession::OfferFrame(const session::FrameRef& frame) {
   }
 }
 
+// Queues the sim thread's replies behind ClientProtocol's; nothing after a fatal Error.
+void TcpSession::TakeOfferedReplies() {
+  offered_replies_.TakeAll(offered_);
+  for (const proto::Envelope& reply : offered_) {
+    if (close_after_writes_) return;
+    QueueEnvelope(reply);
+    if (session::ClientProtocol::EndsConnection(reply)) CloseAfterWrites(reply);
+  }
+}
+
 void TcpSession::PumpWrites() {
   if (writing_ || closed_) return;
-  if (!replies_.empty()) {
-    reply_in_flight_ = std::move(replies_.front());
-    replies_.pop_front();
-    writing_ = true;
-    asio::async_write(socket_, asio::buffer(reply_in_flight_),
-                      [self = shared_from_this()](boost::system::error_code error, std::size_t) { self->OnWritten(error); });
-    return;
-  }
-  if (close_after_writes_) {
-    Close();
-    return;
-  }
-  if (session::FrameRef frame = mailbox_.Take()) WriteFrame(std::move(frame));
+  TakeOfferedReplies();
+  if (!replies_.empty()) return WriteReply();
+  if (close_after_writes_) return Close();
+  if (!next_frame_) next_frame_ = mailbox_.Take();
+  if (!next_frame_) return;
+  // A reply offered before this frame may have arrived since the look above; it goes first.
+  if (offered_replies_.pending()) return PumpWrites();
+  WriteFrame(std::move(next_frame_));
+}
+
+void TcpSession::WriteReply() {
+  reply_in_flight_ = std::move(replies_.front());
+  replies_.pop_front();
+  writing_ = true;
+  asio::async_write(socket_, asio::buffer(reply_in_flight_),
+                    [self = shared_from_this()](boost::system::error_code error, std::size_t) { self->OnWritten(error); });
 }
 
 void TcpSession::WriteFrame(session::FrameRef frame) {
   // A frame of the camera this client subscribed to before a re-subscribe is stale.
   if (!protocol_->subscribed() || frame->camera_index != protocol_->camera_index()) return PumpWrites();
-  const auto& camera_name = context_.scene.cameras[frame->camera_index].name;
-  encoder_.Encode(*frame, camera_name, protocol_->subscription(), protocol_->with_state(), mailbox_.dropped(), true);
+  encoder_.Encode(*frame, frame->camera_name, protocol_->subscription(), protocol_->with_state(), mailbox_.dropped(),
+                  true);
   frame_buffers_.clear();
   for (const Segment& segment : encoder_.segments()) frame_buffers_.emplace_back(segment.data, segment.size);
   frame_in_flight_ = std::move(frame);
@@ -152,11 +183,12 @@ void TcpSession::OnWritten(const boost::system::error_code& error) {
 void TcpSession::Close() {
   if (closed_) return;
   closed_ = true;
-  closed_for_frames_ = true;
+  closing_ = true;
   boost::system::error_code ignored;
   socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
   socket_.close(ignored);
   if (protocol_) protocol_->Disconnect();
+  next_frame_.reset();
   mailbox_.Reset(proto::DELIVERY_NEWEST);  // release frames back to the pool now
   if (on_closed_) on_closed_(client_);
 }

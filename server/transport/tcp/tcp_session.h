@@ -1,6 +1,6 @@
 // One TCP connection: reads length-prefixed Envelopes, asks ClientProtocol
 // what they mean, writes replies and frames. Runs on the transport's Asio
-// thread, except OfferFrame, which the sim thread calls.
+// thread, except OfferFrame and OfferReply, which the sim thread calls.
 #pragma once
 
 #include <atomic>
@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "server/session/client_protocol.h"
+#include "server/session/offered_replies.h"
 #include "server/transport/frame_encoding.h"
 
 namespace sim4cv::transport {
@@ -33,14 +34,20 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   void Close();
 
   void OfferFrame(const session::FrameRef& frame) override;
+  // Queued for the Asio thread, which sends it like ClientProtocol's replies.
+  void OfferReply(proto::Envelope reply) override;
 
  private:
   void ReadPrefix();
   void ReadBody(uint32_t size);
   void HandleRequest();
   void Reply(session::ClientProtocol::Outcome outcome);
+  void CloseAfterWrites(const proto::Envelope& error);
   void QueueEnvelope(const proto::Envelope& envelope);
+  void TakeOfferedReplies();
+  void WakeWriter();
   void PumpWrites();
+  void WriteReply();
   void WriteFrame(session::FrameRef frame);
   void OnWritten(const boost::system::error_code& error);
 
@@ -60,13 +67,17 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   // Writing: replies go before frames; one write in flight at a time.
   std::deque<std::string> replies_;
   std::string reply_in_flight_;
+  session::OfferedReplies offered_replies_;  // from the sim thread
+  std::vector<proto::Envelope> offered_;     // reused: those taken from offered_replies_
+  session::FrameRef next_frame_;             // taken from the mailbox, waiting for replies to go first
   session::FrameRef frame_in_flight_;
   FrameEncoder encoder_;
   std::vector<boost::asio::const_buffer> frame_buffers_;
   bool writing_ = false;
   bool close_after_writes_ = false;
   bool closed_ = false;
-  std::atomic<bool> closed_for_frames_{false};
+  // Closed, or a fatal Error is on its way: the sim thread's offers are dropped.
+  std::atomic<bool> closing_{false};
   std::atomic<bool> pump_posted_{false};
 };
 

@@ -53,19 +53,27 @@ void UdpPeer::OfferFrame(const session::FrameRef& frame) {
   wakeup_->Notify();
 }
 
+void UdpPeer::OfferReply(proto::Envelope reply) {
+  if (closed_) return;  // unregistered: nobody to answer
+  offered_replies_.Offer(std::move(reply));
+  wakeup_->Notify();
+}
+
 bool UdpPeer::NextFrame() {
   while (!frame_in_flight_) {
     session::FrameRef frame = mailbox_.Take();
     if (!frame) return false;
     // A frame of the camera this client subscribed to before a re-subscribe is stale.
     if (!protocol_->subscribed() || frame->camera_index != protocol_->camera_index()) continue;
-    const auto& camera_name = context_.scene.cameras[frame->camera_index].name;
-    encoder_.Encode(*frame, camera_name, protocol_->subscription(), protocol_->with_state(), mailbox_.dropped(), false);
+    encoder_.Encode(*frame, frame->camera_name, protocol_->subscription(), protocol_->with_state(),
+                    mailbox_.dropped(), false);
     chunker_.Start(frame->frame_id, encoder_.segments(), encoder_.total_size());
     frame_in_flight_ = std::move(frame);
     next_chunk_ = 0;
   }
-  return true;
+  // Before the first chunk: a reply offered before this frame may have
+  // arrived since the transport's last look, and it goes first.
+  return next_chunk_ > 0 || !offered_replies_.pending();
 }
 
 bool UdpPeer::Advance(uint32_t count) {

@@ -1,14 +1,17 @@
 // One registered UDP client: its ClientProtocol (the same rules as TCP), its
 // frame mailbox, the frame being cut into chunks, and the UDP-only state
 // (sequence filter, last time heard from, Error rate limit). Lives on the
-// transport's thread, except OfferFrame, which the sim thread calls.
+// transport's thread, except OfferFrame and OfferReply, which the sim thread
+// calls.
 #pragma once
 
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <vector>
 
 #include "server/session/client_protocol.h"
+#include "server/session/offered_replies.h"
 #include "server/transport/frame_encoding.h"
 #include "server/transport/udp/frame_chunker.h"
 #include "server/transport/udp/rate_limiter.h"
@@ -48,6 +51,11 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   void Start();
 
   void OfferFrame(const session::FrameRef& frame) override;
+  // Queued for the transport's thread (woken), which sends it as one datagram
+  // the way it sends ClientProtocol's replies.
+  void OfferReply(proto::Envelope reply) override;
+  // Transport thread: the offered replies, oldest first, into `out` (cleared first).
+  void TakeOfferedReplies(std::vector<proto::Envelope>& out) { offered_replies_.TakeAll(out); }
 
   session::ClientId client() const { return client_; }
   const PeerAddress& address() const { return address_; }
@@ -59,7 +67,9 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   Clock::time_point last_heard() const { return last_heard_; }
 
   // Frame sending. True if a frame is being chunked (after taking the next
-  // one from the mailbox if none was); false if there is nothing to send.
+  // one from the mailbox if none was); false if there is nothing to send, or
+  // if a reply offered before the new frame must go first (the transport
+  // sends it on its next turn, TakeOfferedReplies).
   bool NextFrame();
   const FrameChunker& chunker() const { return chunker_; }
   uint32_t next_chunk() const { return next_chunk_; }
@@ -72,7 +82,8 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   // Forgets the client: tells the sim thread (if `disconnect`; a client
   // whose Hello was refused never reached it) and releases its frames and
   // its ClientProtocol, which holds a reference back to this peer. Nothing
-  // but OfferFrame may be called afterwards.
+  // but OfferFrame and OfferReply (which then drop what they get) may be
+  // called afterwards.
   void Close(bool disconnect);
 
  private:
@@ -84,6 +95,7 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   std::shared_ptr<Wakeup> wakeup_;
   std::unique_ptr<session::ClientProtocol> protocol_;
   session::FrameMailbox mailbox_;
+  session::OfferedReplies offered_replies_;
   std::atomic<bool> closed_{false};
 
   SequenceFilter sequence_;

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <thread>
 #include <unordered_map>
+#include <vector>
 
 #include "protocol/framing.h"
 #include "server/common/check.h"
@@ -92,6 +93,7 @@ class UdpTransport : public Transport {
       if (stop_) break;
       auto now = Clock::now();
       if (fds[0].revents & POLLIN) ReceiveDatagrams(now);
+      SendOfferedReplies(now);
       blocked = !SendFrames();
       now = Clock::now();
       if (now >= next_sweep) {
@@ -211,18 +213,46 @@ class UdpTransport : public Transport {
       case Kind::kGetStats: counters_.Flush(context_->counters); break;
       default: break;
     }
-    const Outcome outcome = peer.protocol().Handle(request_, reply_);
-    if (outcome == Outcome::kNoReply) return;
+    if (peer.protocol().Handle(request_, reply_) == Outcome::kNoReply) return;
+    if (!Answer(peer, now)) Remove(peer.address());
+  }
+
+  // What the sim thread offered each peer (ClientLink::OfferReply), each
+  // sent as ClientProtocol's replies are; a fatal Error unregisters its peer.
+  void SendOfferedReplies(Clock::time_point now) {
+    for (auto it = peers_.begin(); it != peers_.end();) {
+      if (SendRepliesOfferedTo(*it->second, now)) {
+        ++it;
+        continue;
+      }
+      it->second->Close(true);
+      it = peers_.erase(it);
+    }
+  }
+
+  // False once a fatal Error went out: the caller unregisters the peer, and
+  // the replies offered after that Error are dropped with it.
+  bool SendRepliesOfferedTo(UdpPeer& peer, Clock::time_point now) {
+    peer.TakeOfferedReplies(offered_);
+    for (proto::Envelope& offered : offered_) {
+      reply_.Swap(&offered);
+      if (!Answer(peer, now)) return false;
+    }
+    return true;
+  }
+
+  // Sends reply_ to a registered peer, an Error within the peer's rate limit.
+  // False if it was a fatal Error: the caller unregisters the peer.
+  bool Answer(UdpPeer& peer, Clock::time_point now) {
     if (reply_.has_error()) {
       SendError(peer, now);
     } else {
       SendReply(peer.address());
     }
-    if (outcome == Outcome::kReplyAndClose) {
-      counters_.Add(UdpCounter::kClosedByError);
-      LOG_INFO("client " << peer.client() << " over UDP refused and unregistered: " << reply_.error().message());
-      Remove(peer.address());
-    }
+    if (!session::ClientProtocol::EndsConnection(reply_)) return true;
+    counters_.Add(UdpCounter::kClosedByError);
+    LOG_INFO("client " << peer.client() << " over UDP refused and unregistered: " << reply_.error().message());
+    return false;
   }
 
   bool Limit(UdpPeer& peer, Clock::time_point now) {
@@ -364,6 +394,7 @@ class UdpTransport : public Transport {
   DatagramBatch batch_;
   proto::Envelope request_;
   proto::Envelope reply_;
+  std::vector<proto::Envelope> offered_;  // reused: one peer's replies from the sim thread
   std::string reply_bytes_;
   std::array<mmsghdr, kSendBatch> send_headers_{};
   std::array<std::array<iovec, FrameChunker::kMaxIovecs>, kSendBatch> send_iovecs_{};

@@ -1,0 +1,301 @@
+#include "server/daemon/simulation.h"
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+
+#include "server/sim/map/map_text.h"
+
+namespace sim4cv::daemon {
+namespace {
+
+constexpr double kDegrees = std::numbers::pi / 180.0;
+// More cameras than this would make every frame's render loop a burden.
+constexpr std::size_t kMaxCameras = 32;
+constexpr std::size_t kMaxCameraIndices = 1024;
+
+double Degrees(double radians) { return radians / kDegrees; }
+
+void SetLanePoint(const map::LanePoint& lane, proto::LanePoint& out) {
+  out.mutable_position()->set_x(lane.position.x());
+  out.mutable_position()->set_y(lane.position.y());
+  out.set_heading_deg(Degrees(lane.heading));
+  out.set_segment(lane.segment);
+  out.set_s(lane.s);
+}
+
+// Runs `action`, turning the World's std::invalid_argument into the Error
+// a client gets.
+template <typename Action>
+auto Checked(Action&& action) {
+  try {
+    return action();
+  } catch (const std::invalid_argument& error) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, error.what());
+  }
+}
+
+}  // namespace
+
+Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> scene) : config_(config) {
+  Change ignored;
+  Rebuild(std::move(scene), ignored);
+}
+
+int Simulation::FindCamera(const std::string& name) const {
+  if (name.empty()) return -1;
+  for (std::size_t i = 0; i < cameras_.size(); ++i) {
+    if (cameras_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void Simulation::Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change) {
+  // The new World is built before the old one goes, so a throw leaves the old in place.
+  auto world = std::make_unique<sim::World>(*scene);
+  world_ = std::move(world);
+  scene_ = std::move(scene);
+  state_ = world_->InitialState();
+  cameras_ = scene_->cameras;
+  change.new_scene = true;
+}
+
+Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Configured& answer) {
+  using Kind = proto::Configure::RequestCase;
+  Change change;
+  answer.set_request_id(request.request_id());
+  switch (request.request_case()) {
+    case Kind::kLoadMap: LoadMap(request.load_map(), change); break;
+    case Kind::kReset: Rebuild(scene_, change); break;
+    case Kind::kSpawn: answer.set_entity_id(Spawn(request.spawn())); break;
+    case Kind::kRemove: RemoveEntity(request.remove().entity_id(), change); break;
+    case Kind::kSetRoute: SetRoute(request.set_route()); break;
+    case Kind::kCommandUav: CommandUav(request.command_uav()); break;
+    case Kind::kAddCamera: AddCamera(request.add_camera()); break;
+    case Kind::kRemoveCamera: RemoveCamera(request.remove_camera().name(), change); break;
+    case Kind::kQueryRoad: QueryRoad(request.query_road(), *answer.mutable_road()); break;
+    case Kind::kGetWorld: break;
+    case Kind::REQUEST_NOT_SET:
+      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "Configure carries no request");
+  }
+  FillWorldInfo(*answer.mutable_world());
+  return change;
+}
+
+void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
+  if (!config_.log_file.empty() || !config_.replay_file.empty()) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
+                         "LoadMap is refused while the daemon " +
+                             std::string(config_.log_file.empty() ? "replays --replay " + config_.replay_file
+                                                                  : "writes the run log --log " + config_.log_file) +
+                             ": a log holds one map; start another sim4cvd for this map");
+  }
+  std::shared_ptr<const map::Map> loaded;
+  if (load.has_name()) {
+    const std::string path = config_.maps_dir + "/" + load.name() + ".map";
+    if (!std::filesystem::is_regular_file(path)) {
+      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
+                           "LoadMap.name '" + load.name() + "': no such map (looked for " + path +
+                               "); shipped maps are e.g. 'tracking/hard_urban', 'driving/train/train_01_urban'");
+    }
+    loaded = Checked([&] { return std::make_shared<const map::Map>(map::LoadMapFile(path)); });
+  } else {
+    loaded = Checked([&] {
+      try {
+        return std::make_shared<const map::Map>(map::ParseMap(load.text()));
+      } catch (const std::invalid_argument& error) {
+        throw std::invalid_argument(std::string("LoadMap.text: ") + error.what());
+      }
+    });
+  }
+  const float speed = load.car_speed() > 0 ? load.car_speed() : config_.car_speed;
+  auto scene = Checked([&] {
+    return std::make_shared<const sim::Scene>(
+        sim::SceneFromMap(std::move(loaded), load.route(), speed, config_.width, config_.height));
+  });
+  Rebuild(std::move(scene), change);
+}
+
+const sim::Agent& Simulation::AgentOf(uint32_t id, const char* what) const {
+  const sim::Agent* agent = state_.Find(id);
+  if (!agent) {
+    throw ConfigureError(proto::ERROR_CODE_UNKNOWN_ENTITY, std::string(what) + ": no entity has id " +
+                                                               std::to_string(id) + "; the world holds " +
+                                                               sim::AgentList(state_));
+  }
+  return *agent;
+}
+
+uint32_t Simulation::Spawn(const proto::Spawn& spawn) {
+  sim::SpawnPose pose{{spawn.position().x(), spawn.position().y(), spawn.position().z()}, spawn.yaw_deg() * kDegrees};
+  const auto kind = spawn.kind() == proto::ENTITY_KIND_CAR ? sim::AgentKind::kCar : sim::AgentKind::kUav;
+  if (spawn.snap_to_lane() && kind == sim::AgentKind::kCar) {
+    if (!scene_->road_graph) {
+      throw ConfigureError(proto::ERROR_CODE_INVALID_STATE, "Spawn.snap_to_lane needs a map scene; scene '" +
+                                                                scene_->name + "' has no lanes");
+    }
+    const map::LaneProjection nearest = scene_->road_graph->Nearest(pose.position.head<2>());
+    pose.position.head<2>() = nearest.lane.position;
+    pose.yaw = nearest.lane.heading;
+  }
+  return Checked([&] { return world_->Spawn(state_, kind, spawn.name(), pose); });
+}
+
+void Simulation::RemoveEntity(uint32_t id, Change& change) {
+  const std::string name = AgentOf(id, "Remove").name;
+  Checked([&] { world_->Remove(state_, id); });
+  for (std::size_t i = 0; i < cameras_.size(); ++i) {
+    if (cameras_[i].name.empty() || cameras_[i].mounted_on != name) continue;
+    cameras_[i] = {};
+    change.removed_cameras.push_back(static_cast<uint32_t>(i));
+  }
+}
+
+void Simulation::SetRoute(const proto::SetRoute& route) {
+  AgentOf(route.entity_id(), "SetRoute");
+  if (route.has_keep_route()) {
+    Checked([&] { world_->SetCruiseSpeed(state_, route.entity_id(), route.speed()); });
+    return;
+  }
+  std::vector<Eigen::Vector2d> points;
+  bool closed = false;
+  if (route.has_waypoints()) {
+    for (const proto::Vec2& p : route.waypoints().points()) points.emplace_back(p.x(), p.y());
+    closed = route.waypoints().closed();
+  } else {
+    const map::Route* named = scene_->map ? scene_->map->FindRoute(route.route_name()) : nullptr;
+    if (!named) {
+      std::string names;
+      if (scene_->map) {
+        for (const auto& r : scene_->map->routes) names += (names.empty() ? "'" : ", '") + r.name + "'";
+      }
+      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
+                           "SetRoute.route_name '" + route.route_name() + "': scene '" + scene_->name +
+                               "' has no such route; its routes: " + (names.empty() ? "none" : names));
+    }
+    points = Checked([&] { return scene_->road_graph->SampleRoute(*named, 1.0).points; });
+    closed = named->closed;
+  }
+  Checked([&] { world_->SetRoute(state_, route.entity_id(), std::move(points), closed, route.speed()); });
+}
+
+void Simulation::CommandUav(const proto::CommandUav& command) {
+  AgentOf(command.entity_id(), "CommandUav");
+  sim::UavOrder order;
+  switch (command.order_case()) {
+    case proto::CommandUav::kFollow:
+      order.mode = sim::UavOrder::Mode::kFollow;
+      order.target = command.follow().target_id();
+      AgentOf(order.target, "CommandUav.follow.target_id");
+      if (command.follow().altitude() > 0) order.altitude = command.follow().altitude();
+      if (command.follow().pitch_down_deg() > 0) order.pitch_down_deg = command.follow().pitch_down_deg();
+      break;
+    case proto::CommandUav::kHold: {
+      const proto::Vec3& p = command.hold().position();
+      order.mode = sim::UavOrder::Mode::kHold;
+      order.position = {p.x(), p.y(), p.z()};
+      order.yaw = command.hold().yaw_deg() * kDegrees;
+      break;
+    }
+    case proto::CommandUav::kVelocity: {
+      const proto::Vec3& v = command.velocity().velocity();
+      order.mode = sim::UavOrder::Mode::kVelocity;
+      order.velocity = {v.x(), v.y(), v.z()};
+      order.yaw_rate = command.velocity().yaw_rate_deg() * kDegrees;
+      break;
+    }
+    case proto::CommandUav::ORDER_NOT_SET:
+      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "CommandUav needs an order: follow, hold or velocity");
+  }
+  Checked([&] { world_->SetUavOrder(state_, command.entity_id(), order); });
+}
+
+void Simulation::AddCamera(const proto::AddCamera& camera) {
+  if (FindCamera(camera.name()) >= 0) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "AddCamera.name: a camera named '" + camera.name() +
+                                                                 "' already exists");
+  }
+  if (!camera.mounted_on().empty() && !state_.FindByName(camera.mounted_on())) {
+    throw ConfigureError(proto::ERROR_CODE_UNKNOWN_ENTITY, "AddCamera.mounted_on: no entity is named '" +
+                                                               camera.mounted_on() + "'; the world holds " +
+                                                               sim::AgentList(state_));
+  }
+  sim::CameraSpec spec;
+  spec.name = camera.name();
+  spec.mounted_on = camera.mounted_on();
+  spec.width = camera.width();
+  spec.height = camera.height();
+  spec.fov_y_deg = static_cast<float>(camera.fov_y_deg());
+  spec.pitch_down_deg = static_cast<float>(camera.pitch_down_deg());
+  spec.yaw_deg = static_cast<float>(camera.yaw_deg());
+  spec.gimbal = camera.gimbal();
+  spec.offset = {camera.offset().x(), camera.offset().y(), camera.offset().z()};
+  // A removed camera's index is never reused until the next LoadMap or
+  // Reset, so a subscription by index can never be handed another camera.
+  std::size_t live = 0;
+  for (const auto& c : cameras_) live += c.name.empty() ? 0 : 1;
+  if (live >= kMaxCameras || cameras_.size() >= kMaxCameraIndices) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
+                         "the world has " + std::to_string(live) + " cameras (at most " + std::to_string(kMaxCameras) +
+                             ") and " + std::to_string(cameras_.size()) + " camera indices used since the map was "
+                             "loaded (at most " + std::to_string(kMaxCameraIndices) + "); remove one, or Reset");
+  }
+  cameras_.push_back(std::move(spec));
+}
+
+void Simulation::RemoveCamera(const std::string& name, Change& change) {
+  const int index = FindCamera(name);
+  if (index < 0) {
+    throw ConfigureError(proto::ERROR_CODE_UNKNOWN_CAMERA, "RemoveCamera.name: no camera is named '" + name + "'");
+  }
+  if (static_cast<std::size_t>(index) < scene_->cameras.size()) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "RemoveCamera.name: camera '" + name +
+                                                                 "' belongs to the scene; only cameras added "
+                                                                 "with AddCamera can be removed");
+  }
+  cameras_[static_cast<std::size_t>(index)] = {};
+  change.removed_cameras.push_back(static_cast<uint32_t>(index));
+}
+
+void Simulation::QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult& out) const {
+  if (!scene_->road_graph) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_STATE, "QueryRoad needs a map scene (--map or LoadMap); scene '" +
+                                                              scene_->name + "' has no road graph");
+  }
+  const map::RoadGraph& graph = *scene_->road_graph;
+  const Eigen::Vector2d point(query.point().x(), query.point().y());
+  const map::LaneProjection nearest = query.use_heading() ? graph.Nearest(point, query.heading_deg() * kDegrees)
+                                                          : graph.Nearest(point);
+  SetLanePoint(nearest.lane, *out.mutable_nearest());
+  out.set_distance(nearest.distance);
+  out.set_lateral_offset(nearest.lateral_offset);
+  if (query.count() == 0) return;
+  for (const map::LanePoint& ahead : graph.PointsAhead(nearest.lane, query.step(), static_cast<int>(query.count()))) {
+    SetLanePoint(ahead, *out.add_ahead());
+  }
+}
+
+void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
+  out.Clear();
+  out.set_scene_name(scene_->name);
+  out.set_frame_id(state_.frame_id);
+  for (const sim::Agent& agent : state_.agents) {
+    proto::EntityInfo* info = out.add_entities();
+    info->set_id(agent.id);
+    info->set_name(agent.name);
+    info->set_kind(static_cast<proto::EntityKind>(agent.kind));
+  }
+  for (const sim::CameraSpec& camera : cameras_) {
+    proto::CameraInfo* info = out.add_cameras();
+    info->set_name(camera.name);
+    info->set_width(camera.width);
+    info->set_height(camera.height);
+    info->set_fov_y_deg(camera.fov_y_deg);
+    info->set_mounted_on(camera.mounted_on);
+  }
+  if (scene_->map) {
+    for (const auto& route : scene_->map->routes) out.add_routes(route.name);
+  }
+}
+
+}  // namespace sim4cv::daemon

@@ -1,0 +1,77 @@
+// Everything the sim thread simulates, apart from rendering: the current
+// Scene (replaced by LoadMap), the World built from it, the State a step
+// changes, and the cameras (the scene's own plus those clients added).
+// Carries out Configure requests between frames. Sim thread only.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "server/daemon/config.h"
+#include "server/sim/scene.h"
+#include "server/sim/world.h"
+#include "sim4cv.pb.h"
+
+namespace sim4cv::daemon {
+
+// A Configure that cannot be carried out: the code and message of its Error.
+class ConfigureError : public std::runtime_error {
+ public:
+  ConfigureError(proto::ErrorCode code, const std::string& message) : std::runtime_error(message), code_(code) {}
+  proto::ErrorCode code() const { return code_; }
+
+ private:
+  proto::ErrorCode code_;
+};
+
+class Simulation {
+ public:
+  Simulation(const Config& config, std::shared_ptr<const sim::Scene> scene);
+
+  const sim::Scene& scene() const { return *scene_; }
+  sim::World& world() { return *world_; }
+  sim::State& state() { return state_; }
+  const sim::State& state() const { return state_; }
+  // In index order; a removed camera keeps its index with an empty name, so
+  // subscriptions by index stay valid.
+  const std::vector<sim::CameraSpec>& cameras() const { return cameras_; }
+  // The camera called `name`, or -1.
+  int FindCamera(const std::string& name) const;
+
+  // What a carried-out request changed beyond State.
+  struct Change {
+    // LoadMap or Reset: rebuild what was built from the scene; cameras are
+    // the scene's again, added ones gone.
+    bool new_scene = false;
+    // Indices of cameras removed (with their entity, or by RemoveCamera).
+    std::vector<uint32_t> removed_cameras;
+  };
+  // Carries out `request` and fills `answer`, or throws ConfigureError
+  // (changing nothing then).
+  Change Apply(const proto::Configure& request, proto::Configured& answer);
+
+  // The world's entities, cameras and routes as a client sees them.
+  void FillWorldInfo(proto::WorldInfo& out) const;
+
+ private:
+  void Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change);
+  uint32_t Spawn(const proto::Spawn& spawn);
+  void SetRoute(const proto::SetRoute& route);
+  void CommandUav(const proto::CommandUav& command);
+  void AddCamera(const proto::AddCamera& camera);
+  void RemoveCamera(const std::string& name, Change& change);
+  void RemoveEntity(uint32_t id, Change& change);
+  void LoadMap(const proto::LoadMap& load, Change& change);
+  void QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult& out) const;
+  const sim::Agent& AgentOf(uint32_t id, const char* what) const;
+
+  const Config& config_;
+  std::shared_ptr<const sim::Scene> scene_;
+  std::unique_ptr<sim::World> world_;
+  sim::State state_;
+  std::vector<sim::CameraSpec> cameras_;
+};
+
+}  // namespace sim4cv::daemon

@@ -1,0 +1,133 @@
+#include "server/render/traffic_meshes.h"
+
+#include <array>
+
+#include "server/render/map_mesh_util.h"
+#include "server/render/mesh_builder.h"
+
+namespace sim4cv::render {
+namespace {
+
+using Eigen::Vector3f;
+using traffic::Signal;
+
+void AddBox(Mesh& mesh, const Vector3f& centre, const Vector3f& half_extents, const Vector3f& color) {
+  Eigen::Matrix4f at = Eigen::Matrix4f::Identity();
+  at.block<3, 1>(0, 3) = centre;
+  AppendMesh(mesh, MakeBox(half_extents, color), at);
+}
+
+// The same entry for the same variant; `salt` keeps the choices of one
+// walker (shirt, trousers, ...) independent of each other.
+template <std::size_t N>
+const Vector3f& Pick(const std::array<Vector3f, N>& palette, uint32_t variant, uint32_t salt) {
+  return palette[static_cast<std::size_t>(mapmesh::Hash01(variant, 1, salt) * N) % N];
+}
+
+// The housing's front face (x) and its lamps' heights.
+constexpr float kHousingFront = 0.15f;
+constexpr float kLampHalf = 0.11f;     // the dark lamps' half side
+constexpr float kLampDepth = 0.02f;    // how far the dark lamps stand out of the housing
+constexpr float kHousingMiddle = 2.6f;
+constexpr float kLampSpacing = 0.3f;
+
+float LampHeight(Signal signal) {
+  switch (signal) {
+    case Signal::kRed:
+      return kHousingMiddle + kLampSpacing;
+    case Signal::kYellow:
+      return kHousingMiddle;
+    case Signal::kGreen:
+      return kHousingMiddle - kLampSpacing;
+  }
+  return kHousingMiddle;
+}
+
+// Lit and dark colours of a lamp.
+Vector3f LitColour(Signal signal) {
+  switch (signal) {
+    case Signal::kRed:
+      return {1.0f, 0.12f, 0.06f};
+    case Signal::kYellow:
+      return {1.0f, 0.78f, 0.10f};
+    case Signal::kGreen:
+      return {0.15f, 1.0f, 0.40f};
+  }
+  return Vector3f::Ones();
+}
+Vector3f DarkColour(Signal signal) { return LitColour(signal) * 0.18f; }
+
+}  // namespace
+
+Mesh MakePedestrianMesh(uint32_t variant) {
+  static const std::array<Vector3f, 8> kShirts = {
+      Vector3f(0.70f, 0.12f, 0.10f), Vector3f(0.12f, 0.25f, 0.55f), Vector3f(0.85f, 0.85f, 0.80f),
+      Vector3f(0.15f, 0.40f, 0.20f), Vector3f(0.85f, 0.65f, 0.15f), Vector3f(0.30f, 0.30f, 0.32f),
+      Vector3f(0.55f, 0.25f, 0.55f), Vector3f(0.20f, 0.55f, 0.65f)};
+  static const std::array<Vector3f, 5> kTrousers = {Vector3f(0.10f, 0.12f, 0.25f), Vector3f(0.08f, 0.08f, 0.08f),
+                                                    Vector3f(0.40f, 0.33f, 0.22f), Vector3f(0.30f, 0.30f, 0.30f),
+                                                    Vector3f(0.20f, 0.28f, 0.45f)};
+  static const std::array<Vector3f, 4> kSkins = {Vector3f(0.90f, 0.72f, 0.58f), Vector3f(0.72f, 0.52f, 0.38f),
+                                                 Vector3f(0.48f, 0.32f, 0.22f), Vector3f(0.30f, 0.20f, 0.14f)};
+  static const std::array<Vector3f, 4> kHair = {Vector3f(0.06f, 0.05f, 0.04f), Vector3f(0.30f, 0.18f, 0.08f),
+                                                Vector3f(0.75f, 0.62f, 0.35f), Vector3f(0.55f, 0.55f, 0.55f)};
+  const Vector3f shoes(0.05f, 0.05f, 0.06f);
+  const Vector3f& shirt = Pick(kShirts, variant, 11);
+  const Vector3f& trousers = Pick(kTrousers, variant, 12);
+  const Vector3f& skin = Pick(kSkins, variant, 13);
+  const Vector3f& hair = Pick(kHair, variant, 14);
+  // Heights from the ground up; parts that meet overlap a little, so no
+  // faces share a plane (z-fighting) and no gaps show.
+  Mesh mesh;
+  for (float side : {-1.0f, 1.0f}) {
+    AddBox(mesh, {0.04f, side * 0.1f, 0.04f}, {0.13f, 0.055f, 0.04f}, shoes);  // toes forward: shows the facing
+    AddBox(mesh, {0.0f, side * 0.1f, 0.48f}, {0.075f, 0.07f, 0.41f}, trousers);   // 0.07 .. 0.89 m
+    AddBox(mesh, {0.0f, side * 0.265f, 1.13f}, {0.055f, 0.055f, 0.31f}, shirt);   // arms, 0.82 .. 1.44 m
+  }
+  AddBox(mesh, {0.0f, 0.0f, 1.15f}, {0.12f, 0.2f, 0.29f}, shirt);   // torso, 0.86 .. 1.44 m
+  AddBox(mesh, {0.0f, 0.0f, 1.55f}, {0.1f, 0.085f, 0.12f}, skin);   // head (and neck), 1.43 .. 1.67 m
+  AddBox(mesh, {-0.005f, 0.0f, 1.705f}, {0.105f, 0.09f, 0.045f}, hair);  // 1.66 .. kPedestrianHeight
+  return mesh;
+}
+
+Mesh MakeTrafficLightMesh() {
+  const Vector3f metal(0.12f, 0.13f, 0.13f), housing(0.06f, 0.06f, 0.06f), visor(0.02f, 0.02f, 0.02f);
+  Mesh mesh;
+  AddBox(mesh, {0.0f, 0.0f, 1.25f}, {0.07f, 0.07f, 1.25f}, metal);  // up into the housing
+  const float housing_half_height = kTrafficLightHeight - kHousingMiddle;
+  AddBox(mesh, {0.0f, 0.0f, kHousingMiddle}, {kHousingFront, 0.18f, housing_half_height}, housing);
+  for (Signal signal : {Signal::kRed, Signal::kYellow, Signal::kGreen}) {
+    const float z = LampHeight(signal);
+    AddBox(mesh, {kHousingFront + kLampDepth / 2, 0.0f, z}, {kLampDepth / 2, kLampHalf, kLampHalf},
+           DarkColour(signal));
+    AddBox(mesh, {kHousingFront + 0.105f, 0.0f, z + kLampHalf + 0.02f}, {0.1f, 0.13f, 0.01f}, visor);  // 5 mm off the face
+  }
+  return mesh;
+}
+
+Mesh MakeLampMesh(Signal signal) {
+  return MakeBox({0.005f, kLampHalf - 0.01f, kLampHalf - 0.01f}, LitColour(signal));
+}
+
+Eigen::Vector3f LampOffset(Signal signal) {
+  // The plate's back face 5 mm in front of the dark lamp's face.
+  return {kHousingFront + kLampDepth + 0.005f + 0.005f, 0.0f, LampHeight(signal)};
+}
+
+Eigen::Vector3f TrafficCarColour(uint32_t variant) {
+  static const std::array<Vector3f, 10> kColours = {
+      Vector3f(0.85f, 0.85f, 0.83f),  // white
+      Vector3f(0.05f, 0.05f, 0.06f),  // black
+      Vector3f(0.55f, 0.56f, 0.58f),  // silver
+      Vector3f(0.28f, 0.29f, 0.30f),  // grey
+      Vector3f(0.10f, 0.18f, 0.38f),  // dark blue
+      Vector3f(0.40f, 0.05f, 0.08f),  // maroon
+      Vector3f(0.12f, 0.28f, 0.16f),  // dark green
+      Vector3f(0.70f, 0.62f, 0.45f),  // beige
+      Vector3f(0.88f, 0.70f, 0.10f),  // yellow
+      Vector3f(0.30f, 0.45f, 0.60f),  // steel blue
+  };
+  return kColours[variant % kColours.size()];
+}
+
+}  // namespace sim4cv::render

@@ -1,0 +1,43 @@
+// Meshes for the traffic of server/sim/traffic: walkers, traffic lights and
+// their lit lamps, and the colours of traffic cars (which are drawn with
+// MakeCarMesh). Each model is in its own frame, z up, x forward, origin on
+// the ground; the traffic state's pose (position, heading about z) places it.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+
+#include "server/render/render_types.h"
+#include "server/sim/traffic/signal.h"
+
+namespace sim4cv::render {
+
+// How tall a walker is, m.
+inline constexpr float kPedestrianHeight = 1.75f;
+// The traffic light's housing: its top, m above the pole's foot.
+inline constexpr float kTrafficLightHeight = 3.1f;
+
+// A walker, kPedestrianHeight tall, standing: shoes, legs, torso, arms, head
+// and hair, all boxes. Origin on the ground between its feet, facing +x.
+// `variant` picks the clothes, skin and hair; the same variant always gives
+// the same mesh. 108 triangles.
+Mesh MakePedestrianMesh(uint32_t variant);
+
+// A traffic light: a pole and, near its top, a housing with three dark lamps
+// (red on top, yellow, green below) under visors, facing +x. Origin at the
+// pole's foot. Turned by TrafficPlan::Light::heading, +x looks back along the
+// arm at the traffic coming in. 96 triangles.
+Mesh MakeTrafficLightMesh();
+
+// The lit lamp of `signal`: a bright square plate, centred on its origin,
+// facing +x. Draw it each frame at LampOffset(signal) in the light's frame,
+// where it sits 5 mm in front of that signal's dark lamp. 12 triangles.
+Mesh MakeLampMesh(traffic::Signal signal);
+Eigen::Vector3f LampOffset(traffic::Signal signal);
+
+// The body colour of traffic car number `variant` (parked or moving): common
+// car colours, neighbouring variants different, the target car's red and
+// the UAV's blue left out so the simulated vehicles stand apart.
+Eigen::Vector3f TrafficCarColour(uint32_t variant);
+
+}  // namespace sim4cv::render

@@ -1,0 +1,148 @@
+#include "server/session/configure_check.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace sim4cv::session {
+namespace {
+
+// Accumulates the first problem found; later checks are skipped.
+class Checker {
+ public:
+  Checker& Range(const char* field, double value, double low, double high) {
+    if (problem_.empty() && !(std::isfinite(value) && value >= low && value <= high)) {
+      std::ostringstream message;
+      message << field << " is " << value << "; it must be a finite number in [" << low << ", " << high << "]";
+      problem_ = message.str();
+    }
+    return *this;
+  }
+  Checker& Finite(const char* field, double value) { return Range(field, value, -1e6, 1e6); }
+  Checker& Vec(const char* field, const proto::Vec3& v) {
+    const std::string name(field);
+    return Finite((name + ".x").c_str(), v.x()).Finite((name + ".y").c_str(), v.y()).Finite((name + ".z").c_str(), v.z());
+  }
+  Checker& True(bool condition, const std::string& problem) {
+    if (problem_.empty() && !condition) problem_ = problem;
+    return *this;
+  }
+  Checker& Name(const char* field, const std::string& value, bool may_be_empty) {
+    return True(may_be_empty || !value.empty(), std::string(field) + " is empty; give it a name")
+        .True(value.size() <= 64, std::string(field) + " is " + std::to_string(value.size()) +
+                                      " characters long; at most 64");
+  }
+  std::string problem() const { return problem_; }
+
+ private:
+  std::string problem_;
+};
+
+std::string CheckLoadMap(const proto::LoadMap& load) {
+  Checker check;
+  check.True(load.source_case() != proto::LoadMap::SOURCE_NOT_SET, "LoadMap needs a map: set name or text");
+  if (load.has_name()) {
+    const std::string& name = load.name();
+    check.Name("LoadMap.name", name, false)
+        .True(name.find("..") == std::string::npos && (name.empty() || name.front() != '/'),
+              "LoadMap.name '" + name + "' must be a shipped map's name relative to the maps folder, e.g. "
+                                        "'tracking/hard_urban' (no '..', no leading '/')");
+  }
+  check.True(load.text().size() <= (4u << 20), "LoadMap.text is " + std::to_string(load.text().size()) +
+                                                   " bytes; a map text may have at most 4 MiB");
+  return check.Range("LoadMap.car_speed", load.car_speed(), 0, 40).problem();
+}
+
+std::string CheckSpawn(const proto::Spawn& spawn) {
+  return Checker()
+      .True(spawn.kind() == proto::ENTITY_KIND_CAR || spawn.kind() == proto::ENTITY_KIND_UAV,
+            "Spawn.kind is " + std::to_string(spawn.kind()) + "; use ENTITY_KIND_CAR (1) or ENTITY_KIND_UAV (2)")
+      .Name("Spawn.name", spawn.name(), true)
+      .Vec("Spawn.position", spawn.position())
+      .Finite("Spawn.yaw_deg", spawn.yaw_deg())
+      .problem();
+}
+
+std::string CheckSetRoute(const proto::SetRoute& route) {
+  Checker check;
+  check.True(route.path_case() != proto::SetRoute::PATH_NOT_SET,
+             "SetRoute needs route_name, waypoints or keep_route");
+  if (route.has_waypoints()) {
+    const auto& points = route.waypoints().points();
+    check.True(points.size() >= 2 && points.size() <= 100000,
+               "SetRoute.waypoints has " + std::to_string(points.size()) + " points; give 2 to 100000");
+    for (int i = 0; i < points.size(); ++i) {
+      const std::string field = "SetRoute.waypoints.points[" + std::to_string(i) + "]";
+      check.Finite((field + ".x").c_str(), points[i].x()).Finite((field + ".y").c_str(), points[i].y());
+    }
+  }
+  return check.Range("SetRoute.speed", route.speed(), 0, 40).problem();
+}
+
+std::string CheckCommandUav(const proto::CommandUav& command) {
+  Checker check;
+  switch (command.order_case()) {
+    case proto::CommandUav::kFollow:
+      check.Range("CommandUav.follow.altitude", command.follow().altitude(), 0, 500)
+          .Range("CommandUav.follow.pitch_down_deg", command.follow().pitch_down_deg(), 0, 90);
+      break;
+    case proto::CommandUav::kHold:
+      check.Vec("CommandUav.hold.position", command.hold().position())
+          .Range("CommandUav.hold.position.z", command.hold().position().z(), 0.5, 1e4)
+          .Finite("CommandUav.hold.yaw_deg", command.hold().yaw_deg());
+      break;
+    case proto::CommandUav::kVelocity: {
+      const proto::Vec3& v = command.velocity().velocity();
+      check.Range("CommandUav.velocity.velocity.x", v.x(), -20, 20)
+          .Range("CommandUav.velocity.velocity.y", v.y(), -20, 20)
+          .Range("CommandUav.velocity.velocity.z", v.z(), -20, 20)
+          .Range("CommandUav.velocity.yaw_rate_deg", command.velocity().yaw_rate_deg(), -180, 180);
+      break;
+    }
+    case proto::CommandUav::ORDER_NOT_SET:
+      check.True(false, "CommandUav needs an order: follow, hold or velocity");
+  }
+  return check.problem();
+}
+
+std::string CheckAddCamera(const proto::AddCamera& camera) {
+  return Checker()
+      .Name("AddCamera.name", camera.name(), false)
+      .Name("AddCamera.mounted_on", camera.mounted_on(), true)
+      .Range("AddCamera.width", camera.width(), 16, 1920)
+      .Range("AddCamera.height", camera.height(), 16, 1080)
+      .Range("AddCamera.fov_y_deg", camera.fov_y_deg(), 10, 150)
+      .Range("AddCamera.pitch_down_deg", camera.pitch_down_deg(), -90, 90)
+      .Finite("AddCamera.yaw_deg", camera.yaw_deg())
+      .Vec("AddCamera.offset", camera.offset())
+      .problem();
+}
+
+std::string CheckQueryRoad(const proto::QueryRoad& query) {
+  Checker check;
+  check.Vec("QueryRoad.point", query.point()).Finite("QueryRoad.heading_deg", query.heading_deg());
+  check.Range("QueryRoad.count", query.count(), 0, 100);
+  if (query.count() > 0) check.Range("QueryRoad.step", query.step(), 1e-3, 50);
+  return check.problem();
+}
+
+}  // namespace
+
+std::string CheckConfigure(const proto::Configure& request) {
+  using Kind = proto::Configure::RequestCase;
+  switch (request.request_case()) {
+    case Kind::kLoadMap: return CheckLoadMap(request.load_map());
+    case Kind::kSpawn: return CheckSpawn(request.spawn());
+    case Kind::kSetRoute: return CheckSetRoute(request.set_route());
+    case Kind::kCommandUav: return CheckCommandUav(request.command_uav());
+    case Kind::kAddCamera: return CheckAddCamera(request.add_camera());
+    case Kind::kRemoveCamera: return Checker().Name("RemoveCamera.name", request.remove_camera().name(), false).problem();
+    case Kind::kQueryRoad: return CheckQueryRoad(request.query_road());
+    case Kind::kRemove:
+    case Kind::kReset:
+    case Kind::kGetWorld: return {};
+    case Kind::REQUEST_NOT_SET: break;
+  }
+  return "Configure carries no request (empty oneof, or a field number this server does not know)";
+}
+
+}  // namespace sim4cv::session

@@ -1,0 +1,304 @@
+// Moving cars: kinematic, on the lanes' centre lines, with the Intelligent
+// Driver Model (Treiber, Hennecke, Helbing 2000) for speed, lights, a
+// first-come rule at junctions, and a look-ahead along their own route for
+// anything in their way (docs/maps.md, "Traffic").
+//
+// A step runs in three passes so the order cars are stepped in does not
+// matter: Survey (where each car's next junction is, whether a light holds
+// it), Decide (from everyone's start-of-step positions: acceleration and how
+// far it may go), Move.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "server/sim/traffic/layout_util.h"
+#include "server/sim/traffic/traffic_state.h"
+
+namespace sim4cv::traffic {
+namespace {
+
+using map::SegmentId;
+
+constexpr double kMaxAcceleration = 2.0;       // m/s^2, speeding up (IDM's a)
+constexpr double kComfortDeceleration = 4.0;   // m/s^2, braking as a habit (IDM's b)
+constexpr double kStopDeceleration = 6.0;      // a car stops for yellow, red or a yield only if this suffices
+constexpr double kMaxDeceleration = 8.0;       // m/s^2, the hardest braking, to keep clear of others
+constexpr double kStandingGap = 2.5;           // m bumper to bumper when queued (IDM's s0)
+constexpr double kHardGap = 1.0;               // m bumper to bumper a step never closes below
+// s of following distance (IDM's T). At least sqrt(2 s0 / a) = 1.58 s, or
+// a car closing on a stop line or a standing car overshoots (IDM is then
+// under-damped about its standing gap).
+constexpr double kHeadway = 1.6;
+constexpr double kLateralAcceleration = 2.0;   // m/s^2 in bends: the speed limit of a radius r is sqrt(2 r)
+constexpr double kLookAhead = 40.0;            // m along its route that a car looks at
+constexpr double kClaimDistance = 25.0;        // m: closer than this to a junction, a car going in claims it
+constexpr double kCorridorMargin = 0.3;        // m beyond two half widths: another car is in my lane
+constexpr double kWalkerMargin = 0.6;          // m beyond the bodies: a walker is about to be in my lane
+constexpr double kEdgeStop = 0.5;              // m before the junction tile, where a car past the stop line yields
+constexpr double kHalfLength = kCarLength / 2;
+constexpr double kCarCorridor = kCarWidth + kCorridorMargin;
+
+const map::LaneSegment& SegmentOf(const TrafficPlan& plan, SegmentId id) { return plan.graph().segments()[id]; }
+
+// Straight on twice as often as each turn; a U-turn only where it is the one way on (dead ends).
+double TurnWeight(map::Turn turn) {
+  switch (turn) {
+    case map::Turn::kStraight:
+      return 2.0;
+    case map::Turn::kRight:
+    case map::Turn::kLeft:
+      return 1.0;
+    case map::Turn::kUTurn:
+      return 0.0;
+  }
+  return 0.0;
+}
+
+SegmentId ChooseNext(const TrafficPlan& plan, SegmentId from, uint64_t& rng) {
+  const std::vector<SegmentId>& options = SegmentOf(plan, from).successors;
+  if (options.size() == 1) return options.front();
+  double total = 0;
+  for (SegmentId id : options) total += TurnWeight(SegmentOf(plan, id).turn);
+  double u = layout::NextUniform(rng) * total;
+  for (SegmentId id : options) {
+    const double weight = TurnWeight(SegmentOf(plan, id).turn);
+    if (u < weight) return id;
+    u -= weight;
+  }
+  return options.front();  // only rounding gets here
+}
+
+void SetPose(const TrafficPlan& plan, MovingCar& car, double s) {
+  car.lane = plan.graph().At(car.route[0], s);
+  car.heading = car.lane.heading;
+  const Eigen::Vector2d forward(std::cos(car.heading), std::sin(car.heading));
+  car.position = Eigen::Vector3d(car.lane.position.x(), car.lane.position.y(), 0.0);
+  car.linear_velocity = Eigen::Vector3d(forward.x(), forward.y(), 0.0) * car.speed;
+  car.yaw_rate = SegmentOf(plan, car.route[0]).curve.CurvatureAt(car.lane.s) * car.speed;
+}
+
+// How far ahead along the car's route `p` lies, if it is within `corridor`
+// of the route's centre line, ahead of the car and within the look-ahead.
+std::optional<double> AheadOnRoute(const TrafficPlan& plan, const MovingCar& car, const Eigen::Vector2d& p,
+                                   double corridor) {
+  double start = -car.lane.s;  // where route[k] starts, from the car's centre
+  for (int k = 0; k < kPlannedSegments && start <= kLookAhead; ++k) {
+    const map::LaneCurve& curve = SegmentOf(plan, car.route[k]).curve;
+    const map::LaneCurve::Nearest nearest = curve.Project(p);
+    const double along = start + nearest.s;
+    // A projection clamped to a later segment's start is the previous segment's business.
+    const bool clamped_to_start = k > 0 && nearest.s <= 0.0;
+    if (nearest.distance < corridor && along > 0 && !clamped_to_start) {
+      if (along > kLookAhead) return std::nullopt;
+      return along;
+    }
+    start += curve.length();
+  }
+  return std::nullopt;
+}
+
+// Whether a car at `speed` can stop within `distance` braking at most kStopDeceleration.
+bool CanStop(double speed, double distance) {
+  return distance > -0.5 && speed * speed <= 2 * kStopDeceleration * std::max(distance, 0.0) + 1e-9;
+}
+
+// Slowing for bends: for each bend within the look-ahead that the car is
+// too fast for, the constant deceleration that brings it down to the bend's
+// limit where the bend begins (or at once, in the bend). Followed, that
+// deceleration stays the same, so braking for a bend is smooth.
+double BendAcceleration(const TrafficPlan& plan, const MovingCar& car) {
+  double acceleration = kMaxAcceleration;
+  double start = -car.lane.s;
+  const double v = car.speed;
+  for (int k = 0; k < kPlannedSegments && start <= kLookAhead; ++k) {
+    for (const map::Piece& piece : SegmentOf(plan, car.route[k]).curve.pieces()) {
+      const double limit_squared = kLateralAcceleration / std::max(std::abs(piece.curvature), 1e-9);
+      if (start + piece.length > 0 && v * v > limit_squared) {
+        acceleration = std::min(acceleration, -(v * v - limit_squared) / (2 * std::max(start, 1.0)));
+      }
+      start += piece.length;
+    }
+  }
+  return acceleration;
+}
+
+// IDM's braking term for a gap (bumper to bumper) closing at `closing` m/s.
+double Interaction(double speed, double gap, double closing) {
+  const double wanted =
+      kStandingGap +
+      std::max(0.0, speed * kHeadway + speed * closing / (2 * std::sqrt(kMaxAcceleration * kComfortDeceleration)));
+  const double ratio = wanted / std::max(gap, 0.1);
+  return kMaxAcceleration * ratio * ratio;
+}
+
+void Survey(const TrafficPlan& plan, const MovingCar& car, double sim_time, CarStepWork& work) {
+  work = CarStepWork{};
+  work.inside = plan.JunctionOf(car.route[0]) >= 0;
+  // The next junction on the route, beyond the one the car may be in.
+  SegmentId next = -1;
+  double to_next = SegmentOf(plan, car.route[0]).length() - car.lane.s;
+  for (int k = 1; k < kPlannedSegments && to_next <= kLookAhead; ++k) {
+    if (plan.JunctionOf(car.route[k]) >= 0) {
+      next = car.route[k];
+      break;
+    }
+    to_next += SegmentOf(plan, car.route[k]).length();
+  }
+  bool held = false;
+  if (next >= 0) {
+    const int light = plan.LightControlling(next);
+    const double stop_line = to_next - kStopLineBack - kHalfLength;
+    // Yellow or red: stop if it can still stop comfortably (or is already
+    // stopping for it), else go on through.
+    if (light >= 0 && plan.SignalAt(static_cast<std::size_t>(light), sim_time) != Signal::kGreen &&
+        (car.stopping_for == next || CanStop(car.speed, stop_line))) {
+      held = true;
+      work.stop_at = stop_line;
+      work.stopping_for = next;
+    }
+  }
+  if (work.inside) {
+    work.junction_segment = car.route[0];
+    work.to_junction = -car.lane.s;
+    work.claims = true;
+  } else if (next >= 0) {
+    work.junction_segment = next;
+    work.to_junction = to_next;
+    work.claims = !held && to_next < kClaimDistance;
+  }
+  if (work.claims) work.claimed_since = car.claimed == work.junction_segment ? car.claimed_since : sim_time;
+}
+
+// First come, first served: a car about to enter a junction gives way to
+// any car in it, or that claimed it earlier (then: nearer to it), whose lane
+// crosses or merges with its own. The order is total, so no two cars wait
+// for each other, and a car waiting to turn is not passed for ever.
+bool MustYield(const TrafficPlan& plan, const std::vector<CarStepWork>& work, std::size_t me) {
+  const CarStepWork& mine = work[me];
+  for (std::size_t other = 0; other < work.size(); ++other) {
+    const CarStepWork& theirs = work[other];
+    if (other == me || !theirs.claims || !plan.Conflict(mine.junction_segment, theirs.junction_segment)) continue;
+    if (theirs.inside) return true;
+    if (theirs.claimed_since != mine.claimed_since) {
+      if (theirs.claimed_since < mine.claimed_since) return true;
+      continue;
+    }
+    if (theirs.to_junction < mine.to_junction || (theirs.to_junction == mine.to_junction && other < me)) return true;
+  }
+  return false;
+}
+
+void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::span<const Eigen::Vector2d> obstacles) {
+  const MovingCar& car = state.cars[me];
+  CarStepWork& work = state.work[me];
+  const double v = car.speed;
+  if (work.claims && !work.inside && MustYield(plan, state.work, me)) {
+    const double stop_line = work.to_junction - kStopLineBack - kHalfLength;
+    const double edge = work.to_junction - kHalfLength - kEdgeStop;
+    const bool stopping = car.stopping_for == work.junction_segment;
+    if ((stopping && stop_line > -kEdgeStop) || CanStop(v, stop_line)) {
+      work.stop_at = std::min(work.stop_at, stop_line);
+      work.stopping_for = work.junction_segment;
+    } else if (stopping || (edge > -0.5 && v * v <= 2 * kMaxDeceleration * std::max(edge, 0.0))) {
+      work.stop_at = std::min(work.stop_at, edge);
+      work.stopping_for = work.junction_segment;
+    }  // else it is too close to stop: it goes on
+  }
+  double braking = 0.0;  // the largest IDM interaction term
+  double free = std::numeric_limits<double>::infinity();
+  const auto constraint = [&](double gap, double closing, double hard_gap) {
+    braking = std::max(braking, Interaction(v, gap, closing));
+    free = std::min(free, gap - hard_gap);
+  };
+  // A stop line is a standing car kStandingGap beyond it, so the queue's head halts at the line.
+  if (std::isfinite(work.stop_at)) constraint(work.stop_at + kStandingGap, v, kStandingGap);
+  const Eigen::Vector2d here = car.position.head<2>();
+  const auto near = [&](const Eigen::Vector2d& p) { return (p - here).norm() <= kLookAhead + kCarLength; };
+  for (std::size_t other = 0; other < state.cars.size(); ++other) {
+    const MovingCar& them = state.cars[other];
+    const Eigen::Vector2d there = them.position.head<2>();
+    if (other == me || !near(there)) continue;
+    const std::optional<double> ahead = AheadOnRoute(plan, car, there, kCarCorridor);
+    if (!ahead) continue;
+    // Each in the other's way (lanes crossing or merging): the one nearer
+    // the meeting point goes first.
+    const std::optional<double> behind = AheadOnRoute(plan, them, here, kCarCorridor);
+    if (behind && (*ahead < *behind || (*ahead == *behind && me < other))) continue;
+    const double their_speed = std::max(0.0, them.speed * std::cos(them.heading - car.heading));
+    constraint(*ahead - kCarLength, v - their_speed, kHardGap);
+  }
+  for (const Walker& walker : state.walkers) {
+    const Eigen::Vector2d there = walker.position.head<2>();
+    if (!near(there)) continue;
+    if (const std::optional<double> ahead =
+            AheadOnRoute(plan, car, there, kCarWidth / 2 + kWalkerRadius + kWalkerMargin)) {
+      constraint(*ahead - kHalfLength - kWalkerRadius, v, kHardGap);
+    }
+  }
+  for (const Eigen::Vector2d& there : obstacles) {
+    if (!near(there)) continue;
+    if (const std::optional<double> ahead = AheadOnRoute(plan, car, there, kCarCorridor)) {
+      constraint(*ahead - kCarLength, v, kHardGap);  // its speed is unknown: taken as standing
+    }
+  }
+  for (const TrafficPlan::RoadObstacle& obstacle : plan.road_obstacles()) {
+    if (!near(obstacle.position)) continue;
+    if (const std::optional<double> ahead =
+            AheadOnRoute(plan, car, obstacle.position, kCarWidth / 2 + obstacle.radius + kCorridorMargin)) {
+      constraint(*ahead - kHalfLength - obstacle.radius, v, kHardGap);
+    }
+  }
+  const double ratio = v / car.cruise_speed;
+  const double acceleration =
+      std::min(kMaxAcceleration * (1 - ratio * ratio * ratio * ratio), BendAcceleration(plan, car)) - braking;
+  work.acceleration = std::clamp(acceleration, -kMaxDeceleration, kMaxAcceleration);
+  work.free_distance = std::max(0.0, free);
+}
+
+void Move(const TrafficPlan& plan, MovingCar& car, const CarStepWork& work, double dt) {
+  double speed = std::max(0.0, car.speed + work.acceleration * dt);
+  double distance = speed * dt;
+  // The look-ahead's hard limit: braking harder than kMaxDeceleration
+  // rather than touching what is ahead or crossing a stop line.
+  if (distance > work.free_distance) {
+    distance = work.free_distance;
+    speed = std::min(speed, distance / dt);
+  }
+  car.acceleration = (speed - car.speed) / dt;
+  car.speed = speed;
+  car.stopping_for = work.stopping_for;
+  car.claimed = work.claims ? work.junction_segment : -1;
+  car.claimed_since = work.claimed_since;
+  double s = car.lane.s + distance;
+  while (s > SegmentOf(plan, car.route[0]).length()) {
+    s -= SegmentOf(plan, car.route[0]).length();
+    std::copy(car.route.begin() + 1, car.route.end(), car.route.begin());
+    car.route.back() = ChooseNext(plan, car.route[kPlannedSegments - 2], car.rng_state);
+  }
+  SetPose(plan, car, s);
+}
+
+}  // namespace
+
+MovingCar CarAt(const TrafficPlan& plan, SegmentId segment, double s, double cruise_speed, uint64_t rng_seed,
+                double speed) {
+  MovingCar car;
+  car.route[0] = plan.graph().segment(segment).id;  // throws for a segment the map does not have
+  car.rng_state = rng_seed;
+  for (int k = 1; k < kPlannedSegments; ++k) car.route[k] = ChooseNext(plan, car.route[k - 1], car.rng_state);
+  car.cruise_speed = cruise_speed;
+  car.speed = speed;
+  SetPose(plan, car, s);
+  return car;
+}
+
+void StepCars(const TrafficPlan& plan, TrafficState& state, double sim_time, double dt,
+              std::span<const Eigen::Vector2d> obstacles) {
+  if (state.work.size() != state.cars.size()) state.work.resize(state.cars.size());
+  for (std::size_t i = 0; i < state.cars.size(); ++i) Survey(plan, state.cars[i], sim_time, state.work[i]);
+  for (std::size_t i = 0; i < state.cars.size(); ++i) Decide(plan, state, i, obstacles);
+  for (std::size_t i = 0; i < state.cars.size(); ++i) Move(plan, state.cars[i], state.work[i], dt);
+}
+
+}  // namespace sim4cv::traffic

@@ -1,0 +1,112 @@
+// Initial traffic, walkers, and the whole step (cars: traffic_cars.cpp).
+#include "server/sim/traffic/traffic_state.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "server/common/check.h"
+#include "server/sim/traffic/layout_util.h"
+
+namespace sim4cv::traffic {
+namespace {
+
+// A walker lets a car pass unless it could stop for him braking this hard
+// after this long.
+constexpr double kWalkerYieldDeceleration = 3.0;  // m/s^2
+constexpr double kWalkerReaction = 1.0;           // s
+
+void PlaceWalker(const TrafficPlan& plan, Walker& walker, bool walking) {
+  const TrafficPlan::WalkPath& path = plan.walk_paths()[walker.path];
+  const Eigen::Vector2d unit = (path.end - path.start) / path.length;
+  const Eigen::Vector2d at = path.start + unit * walker.s;
+  const Eigen::Vector2d facing = unit * walker.direction;
+  walker.position = Eigen::Vector3d(at.x(), at.y(), 0.0);
+  walker.heading = std::atan2(facing.y(), facing.x());
+  walker.linear_velocity = Eigen::Vector3d(facing.x(), facing.y(), 0.0) * (walking ? walker.speed : 0.0);
+}
+
+// Whether `car` is on the walking line, or will be there before it could
+// stop comfortably for a walker stepping off now (with a second to react).
+bool CarComing(const TrafficPlan& plan, const TrafficPlan::WalkPath& path, const MovingCar& car) {
+  constexpr double kBodyClear = kCarLength / 2 + kWalkerRadius + 0.5;  // centre to line, where bodies are apart
+  const double reach = car.speed * kWalkerReaction + car.speed * car.speed / (2 * kWalkerYieldDeceleration);
+  double start = -car.lane.s;  // where route[k] starts, from the car's centre
+  for (map::SegmentId id : car.route) {
+    for (const TrafficPlan::LaneCrossing& crossing : path.crossings) {
+      const double distance = start + crossing.s;
+      if (crossing.segment == id && distance > -kBodyClear && distance < reach + kBodyClear) return true;
+    }
+    start += plan.graph().segments()[id].length();
+  }
+  return false;
+}
+
+// Walkers step off only where no car is coming, and across a junction's
+// arm only while its light is red, with time to get across before it turns
+// green (or at the very start of a red too short for anyone to get across in).
+bool MayCross(const TrafficPlan& plan, const TrafficPlan::WalkPath& path, const Walker& walker, double sim_time,
+              std::span<const MovingCar> cars) {
+  if (path.light >= 0) {
+    const TrafficPlan::SignalPhase phase = plan.PhaseAt(static_cast<std::size_t>(path.light), sim_time);
+    if (phase.signal != Signal::kRed) return false;
+    const double red_s = plan.cycle_s() - plan.config().green_s - plan.config().yellow_s;
+    if (phase.time_left < path.length / walker.speed && phase.time_left < red_s - 1.0) return false;
+  }
+  return std::none_of(cars.begin(), cars.end(), [&](const MovingCar& car) { return CarComing(plan, path, car); });
+}
+
+void StepWalker(const TrafficPlan& plan, Walker& walker, double sim_time, double dt, std::span<const MovingCar> cars) {
+  const TrafficPlan::WalkPath& path = plan.walk_paths()[walker.path];
+  if (walker.pause_left > 0) {
+    walker.pause_left = std::max(0.0, walker.pause_left - dt);
+    PlaceWalker(plan, walker, false);
+    return;
+  }
+  const bool at_kerb = walker.direction > 0 ? walker.s <= 0 : walker.s >= path.length;
+  if (at_kerb && !MayCross(plan, path, walker, sim_time, cars)) {
+    PlaceWalker(plan, walker, false);
+    return;
+  }
+  walker.s += walker.direction * walker.speed * dt;
+  if (walker.s > 0 && walker.s < path.length) {
+    PlaceWalker(plan, walker, true);
+    return;
+  }
+  // Across: stand a while on the pavement, turned round to go back.
+  walker.s = std::clamp(walker.s, 0.0, path.length);
+  walker.direction = -walker.direction;
+  walker.pause_left = kMinPause + (kMaxPause - kMinPause) * layout::NextUniform(walker.rng_state);
+  PlaceWalker(plan, walker, false);
+}
+
+}  // namespace
+
+TrafficState InitialTraffic(const TrafficPlan& plan) {
+  TrafficState state;
+  state.cars.reserve(plan.car_starts().size());
+  for (const TrafficPlan::CarStart& start : plan.car_starts()) {
+    state.cars.push_back(CarAt(plan, start.lane.segment, start.lane.s, start.cruise_speed, start.rng_seed));
+  }
+  state.work.resize(state.cars.size());
+  state.walkers.reserve(plan.walker_starts().size());
+  for (const TrafficPlan::WalkerStart& start : plan.walker_starts()) {
+    Walker walker;
+    walker.path = start.path;
+    walker.speed = start.speed;
+    walker.pause_left = start.pause_s;
+    walker.rng_state = start.rng_seed;
+    PlaceWalker(plan, walker, false);
+    state.walkers.push_back(walker);
+  }
+  return state;
+}
+
+void StepTraffic(const TrafficPlan& plan, TrafficState& state, double sim_time, double dt,
+                 std::span<const Eigen::Vector2d> obstacles) {
+  SIM4CV_THROW_UNLESS(std::isfinite(dt) && dt > 0, "traffic step of " << dt << " s: must be > 0");
+  // Cars first: they look at the walkers where they stand at the step's start.
+  StepCars(plan, state, sim_time, dt, obstacles);
+  for (Walker& walker : state.walkers) StepWalker(plan, walker, sim_time, dt, state.cars);
+}
+
+}  // namespace sim4cv::traffic
