@@ -24,6 +24,16 @@ T ParseNumber(const std::string& flag, const std::string& text, T low, T high) {
   return value;
 }
 
+// "1,3,7": entity ids, each in [1, 65535].
+std::vector<uint32_t> ParseIdList(const std::string& flag, const std::string& text) {
+  std::vector<uint32_t> ids;
+  std::istringstream items(text);
+  std::string item;
+  while (std::getline(items, item, ',')) ids.push_back(ParseNumber<uint32_t>(flag, item, 1, 65535));
+  SIM4CV_THROW_UNLESS(!ids.empty(), flag << " is '" << text << "'; give entity ids separated by commas, e.g. 1");
+  return ids;
+}
+
 }  // namespace
 
 uint32_t Config::substeps_per_frame() const {
@@ -69,6 +79,8 @@ Usage: sim4cvd [flags]
                             the scene name)
   --replay FILE             the car and the UAV follow the poses of the run log FILE frame by frame
                             instead of physics, then hold the last pose; same scene and --frame-hz
+  --replay-only IDS         with --replay, only these entities (e.g. 1: the target car) follow the
+                            log; the others fly and drive by physics around them (default: all)
   --help                    this text
 
 When ready it prints one line on stdout, e.g. `sim4cvd listening tcp=PORT udp=PORT shm=/NAME`
@@ -127,6 +139,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--log", [&](auto&, auto& v) { config.log_file = v; }},
       {"--log-label", [&](auto&, auto& v) { config.log_label = v; }},
       {"--replay", [&](auto&, auto& v) { config.replay_file = v; }},
+      {"--replay-only", [&](auto& f, auto& v) { config.replay_only = ParseIdList(f, v); }},
   };
   for (std::size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--help" || args[i] == "-h") {
@@ -142,6 +155,8 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   SIM4CV_THROW_UNLESS(config.scene_file.empty() || config.map_file.empty(),
                       "--scene and --map both given; pick one");
   SIM4CV_THROW_UNLESS(config.log_label.empty() || !config.log_file.empty(), "--log-label needs --log FILE");
+  SIM4CV_THROW_UNLESS(config.replay_only.empty() || !config.replay_file.empty(),
+                      "--replay-only needs --replay FILE: it says which entities follow that log");
   // The writer truncates its file before replay could read it.
   SIM4CV_THROW_UNLESS(config.log_file.empty() || config.log_file != config.replay_file,
                       "--log and --replay both name '" << config.log_file << "'; recording would erase the replayed log");

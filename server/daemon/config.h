@@ -43,6 +43,7 @@ struct Config {
   std::string log_file;     // empty: no run log
   std::string log_label;    // the log header's label; empty: the scene name
   std::string replay_file;  // empty: simulate
+  std::vector<uint32_t> replay_only;  // entity ids that follow the log; empty: all (physics is not stepped)
 
   // Physics steps per frame; physics_hz must be a whole multiple of frame_hz.
   uint32_t substeps_per_frame() const;

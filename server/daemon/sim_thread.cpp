@@ -34,7 +34,6 @@ SimThread::SimThread(const Config& config, std::shared_ptr<const sim::Scene> sce
     : config_(config), commands_(commands), latest_state_(latest_state), directory_(directory),
       sim_(config_, std::move(scene)) {
   const sim::Scene& scene_ref = sim_.scene();
-  if (!config.replay_file.empty()) sim_.world().SetReplay(LoadReplayTrack(config, scene_ref));
   if (!config.log_file.empty()) {
     logger_ = std::make_unique<RunLogger>(config, scene_ref, sim_.state(), counters);
     scheduler_.SetObserver(logger_.get());

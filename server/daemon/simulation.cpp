@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <numbers>
 
+#include "server/daemon/run_logger.h"
 #include "server/sim/map/map_text.h"
 
 namespace sim4cv::daemon {
@@ -38,6 +39,7 @@ auto Checked(Action&& action) {
 }  // namespace
 
 Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> scene) : config_(config) {
+  if (!config.replay_file.empty()) replay_ = LoadReplayTrack(config, *scene);
   Change ignored;
   Rebuild(std::move(scene), ignored);
 }
@@ -53,6 +55,7 @@ int Simulation::FindCamera(const std::string& name) const {
 void Simulation::Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change) {
   // The new World is built before the old one goes, so a throw leaves the old in place.
   auto world = std::make_unique<sim::World>(*scene);
+  if (replay_) world->SetReplay(replay_, config_.replay_only);
   world_ = std::move(world);
   scene_ = std::move(scene);
   state_ = world_->InitialState();

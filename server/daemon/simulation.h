@@ -72,6 +72,7 @@ class Simulation {
   std::unique_ptr<sim::World> world_;
   sim::State state_;
   std::vector<sim::CameraSpec> cameras_;
+  std::shared_ptr<const runlog::ReplayTrack> replay_;  // --replay; kept across Reset
 };
 
 }  // namespace sim4cv::daemon

@@ -125,7 +125,15 @@ World::~World() = default;
 
 State World::InitialState() const { return initial_state_; }
 
-void World::SetReplay(std::shared_ptr<const runlog::ReplayTrack> track) { replay_ = std::move(track); }
+void World::SetReplay(std::shared_ptr<const runlog::ReplayTrack> track, std::vector<uint32_t> only) {
+  replay_ = std::move(track);
+  std::sort(only.begin(), only.end());
+  replay_only_ = std::move(only);
+}
+
+bool World::Replayed(uint32_t id) const {
+  return replay_ && (replay_only_.empty() || std::binary_search(replay_only_.begin(), replay_only_.end(), id));
+}
 
 uint32_t World::Spawn(State& state, AgentKind kind, const std::string& name, const SpawnPose& pose) {
   SIM4CV_THROW_UNLESS(pose.position.allFinite() && std::isfinite(pose.yaw),
@@ -230,7 +238,7 @@ void World::SetUavOrder(State& state, uint32_t id, const UavOrder& order) {
 
 void World::Step(State& state, double dt) {
   SIM4CV_DEMAND(dt > 0);
-  if (replay_) {
+  if (replay_ && replay_only_.empty()) {
     FollowReplay(state);
   } else {
     StepPhysics(state, dt);
@@ -253,6 +261,15 @@ void World::StepPhysics(State& state, double dt) {
     Agent& agent = state.agents[i];
     Vehicle& vehicle = b.vehicles[i];
     SIM4CV_ASSERT(vehicle.id == agent.id);
+    if (Replayed(agent.id)) {
+      Follow(replay_->Find(state.frame_id + 1, agent.id), agent.body);
+      if (vehicle.car) {
+        vehicle.car->Reset(agent.body.position.head<2>(), agent.body.Yaw());
+      } else {
+        vehicle.uav->Reset(agent.body.position, agent.body.Yaw());
+      }
+      continue;
+    }
     if (vehicle.car) {
       vehicles::CarControls controls;
       if (agent.car_command.manual || !vehicle.driver) {
@@ -275,6 +292,7 @@ void World::StepPhysics(State& state, double dt) {
   b.world.stepSimulation(dt, 0);
   for (std::size_t i = 0; i < state.agents.size(); ++i) {
     const Vehicle& vehicle = b.vehicles[i];
+    if (Replayed(vehicle.id)) continue;  // State already holds its logged body
     CopyState(vehicle.car ? vehicle.car->State() : vehicle.uav->State(), state.agents[i].body);
   }
 }

@@ -66,12 +66,17 @@ class World {
   // What a UAV's controller holds from now on.
   void SetUavOrder(State& state, uint32_t id, const UavOrder& order);
 
-  // Replay (docs/logs.md): from now on Step moves no body by physics; it
-  // copies into State each agent's logged pose and velocity of the frame
-  // being stepped to (state.frame_id + 1). A frame the log does not hold
-  // (past its end, or a gap) keeps the previous pose at rest. Bullet is not
-  // stepped: nothing else in the world moves, and rendering reads State.
-  void SetReplay(std::shared_ptr<const runlog::ReplayTrack> track);
+  // Replay (docs/logs.md): from now on Step copies into State each replayed
+  // agent's logged pose and velocity of the frame being stepped to
+  // (state.frame_id + 1). A frame the log does not hold (past its end, or a
+  // gap) keeps the previous pose at rest. `only` empty: every agent is
+  // replayed and Bullet is not stepped at all (nothing else in the world
+  // moves, and rendering reads State). Otherwise only the listed entities
+  // are, and the rest is simulated around them: e.g. the tracking target
+  // drives exactly its recorded path while the UAVs fly by physics. A
+  // replayed car's chassis is put at its logged pose every step, so the
+  // simulated bodies meet it where it is drawn.
+  void SetReplay(std::shared_ptr<const runlog::ReplayTrack> track, std::vector<uint32_t> only = {});
 
   // The lane the scene's target car drives (right lane of its road loop).
   const ClosedPath& car_lane() const { return car_lane_; }
@@ -83,12 +88,15 @@ class World {
   Vehicle& VehicleOf(const State& state, uint32_t id, AgentKind kind, const char* what);
   void StepPhysics(State& state, double dt);
   void FollowReplay(State& state) const;
+  // Whether entity `id` follows the log (only while a replay is set).
+  bool Replayed(uint32_t id) const;
 
   const Scene& scene_;
   ClosedPath car_lane_;
   std::unique_ptr<Bodies> bodies_;
   State initial_state_;  // taken when the scene's bodies were spawned
   std::shared_ptr<const runlog::ReplayTrack> replay_;
+  std::vector<uint32_t> replay_only_;  // sorted; empty: all
 };
 
 // The ids of a State's agents, as "1 ('car'), 2 ('uav')": for Error messages.

@@ -12,3 +12,6 @@ sim4cv_test(integration map_scene_test sim4cv_client)
 target_compile_definitions(map_scene_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOURCE_DIR}")  # finds scenes/
 sim4cv_test(integration run_log_daemon_test sim4cv_client sim4cv_runlog)
 sim4cv_test(integration replay_daemon_test sim4cv_client sim4cv_runlog)
+sim4cv_test(integration configure_entities_test sim4cv_client)
+sim4cv_test(integration configure_cameras_test sim4cv_client)
+sim4cv_test(integration configure_map_test sim4cv_client)

@@ -131,4 +131,14 @@ std::string DaemonProcess::stderr_text() const {
   return s.str();
 }
 
+std::vector<std::string> DaemonProcess::warning_lines() const {
+  // The log writes "[SECONDS] LEVEL TEXT", the level padded to 5 characters.
+  std::vector<std::string> lines;
+  std::istringstream text(stderr_text());
+  for (std::string line; std::getline(text, line);) {
+    if (line.find("] WARN ") != std::string::npos || line.find("] ERROR ") != std::string::npos) lines.push_back(line);
+  }
+  return lines;
+}
+
 }  // namespace sim4cv::testing

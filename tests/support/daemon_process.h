@@ -30,6 +30,8 @@ class DaemonProcess {
   int Stop(int timeout_ms = 10000);
   // Everything the daemon wrote to stderr so far.
   std::string stderr_text() const;
+  // The lines of stderr_text() the daemon's log wrote at warning or error level.
+  std::vector<std::string> warning_lines() const;
 
  private:
   pid_t pid_ = -1;

@@ -112,6 +112,15 @@ TEST(ConfigTest, RunLogFlags) {
   EXPECT_EQ(config.replay_file, "/tmp/old.s4log");
   ExpectMentions(ParseError({"--log-label", "x"}), {"--log-label", "--log"});
   ExpectMentions(ParseError({"--log", "a.s4log", "--replay", "a.s4log"}), {"--log", "--replay", "'a.s4log'"});
+  EXPECT_EQ(Parse({"--replay", "a.s4log", "--replay-only", "1,3"}).replay_only, (std::vector<uint32_t>{1, 3}));
+  ExpectMentions(ParseError({"--replay-only", "1"}), {"--replay-only needs --replay"});
+  ExpectMentions(ParseError({"--replay", "a.s4log", "--replay-only", "1,x"}), {"--replay-only", "'x'"});
+  ExpectMentions(ParseError({"--replay", "a.s4log", "--replay-only", "0"}), {"--replay-only is 0"});
+}
+
+TEST(ConfigTest, MapsDirForLoadMap) {
+  EXPECT_NE(Parse({}).maps_dir.find("scenes"), std::string::npos);
+  EXPECT_EQ(Parse({"--maps-dir", "/srv/maps"}).maps_dir, "/srv/maps");
 }
 
 TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
@@ -122,7 +131,7 @@ TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
     ExpectMentions(help, {"--scene", "--seed", "--bind", "--tcp-port", "--physics-hz", "--frame-hz", "--width",
                           "--height", "--mode", "--max-message-bytes", "--max-clients", "--tcp-send-buffer", "--udp-port", "--udp-datagram-bytes",
                           "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--log-level", "--log ", "--log-label",
-                          "--replay", "--help",
+                          "--replay", "--replay-only", "--maps-dir", "--help",
                           "lockstep", "realtime"});
     EXPECT_EQ(help, HelpText());
   }

@@ -28,8 +28,8 @@ std::string TimeoutMessage(const char* awaited, Client::Duration timeout, const 
 
 }  // namespace
 
-ServerError::ServerError(proto::ErrorCode code, const std::string& message, bool fatal)
-    : std::runtime_error(message), code_(code), fatal_(fatal) {}
+ServerError::ServerError(proto::ErrorCode code, const std::string& message, bool fatal, uint32_t request_id)
+    : std::runtime_error(message), code_(code), fatal_(fatal), request_id_(request_id) {}
 
 std::optional<ImageView> FindImage(const proto::Frame& frame, proto::Channel channel) {
   for (const proto::Image& image : frame.images()) {
@@ -131,6 +131,84 @@ proto::State Client::GetState(Duration timeout) {
   return std::move(*reply.mutable_state());
 }
 
+proto::Configured Client::Configure(proto::Configure request, Duration timeout) {
+  const detail::Deadline deadline = DeadlineAfter(timeout);
+  if (++last_request_id_ == 0) ++last_request_id_;  // 0 could not be told apart from other Errors
+  const uint32_t id = last_request_id_;
+  request.set_request_id(id);
+  Envelope envelope;
+  *envelope.mutable_configure() = std::move(request);
+  SendEnvelope(envelope);
+  const auto answer = [id](const Envelope& e) {
+    return (e.has_configured() && e.configured().request_id() == id) || (e.has_error() && e.error().request_id() == id);
+  };
+  Envelope reply;
+  if (!ReceiveMatching(answer, /*errors_interrupt=*/false, reply, deadline)) {
+    throw ConnectionError(TimeoutMessage("Configured", timeout, peer_));
+  }
+  if (reply.has_error()) ThrowServerError(reply.error());
+  return std::move(*reply.mutable_configured());
+}
+
+proto::WorldInfo Client::ConfigureWorld(proto::Configure request) {
+  return std::move(*Configure(std::move(request)).mutable_world());
+}
+
+proto::WorldInfo Client::LoadMapByName(const std::string& name, const std::string& route, float car_speed) {
+  return ConfigureWorld(detail::LoadMapByNameRequest(name, route, car_speed));
+}
+
+proto::WorldInfo Client::LoadMapText(const std::string& text, const std::string& route, float car_speed) {
+  return ConfigureWorld(detail::LoadMapTextRequest(text, route, car_speed));
+}
+
+uint32_t Client::Spawn(proto::EntityKind kind, const std::string& name, double x, double y, double z, double yaw_deg,
+                       bool snap_to_lane) {
+  return Configure(detail::SpawnRequest(kind, name, x, y, z, yaw_deg, snap_to_lane)).entity_id();
+}
+
+proto::WorldInfo Client::Remove(uint32_t entity_id) { return ConfigureWorld(detail::RemoveRequest(entity_id)); }
+
+proto::WorldInfo Client::SetRoute(uint32_t entity_id, const std::string& route_name, float speed) {
+  return ConfigureWorld(detail::SetRouteRequest(entity_id, route_name, speed));
+}
+
+proto::WorldInfo Client::SetWaypoints(uint32_t entity_id, const std::vector<std::array<double, 2>>& points, bool closed,
+                                      float speed) {
+  return ConfigureWorld(detail::SetWaypointsRequest(entity_id, points, closed, speed));
+}
+
+proto::WorldInfo Client::SetSpeed(uint32_t entity_id, float speed) {
+  return ConfigureWorld(detail::SetSpeedRequest(entity_id, speed));
+}
+
+proto::WorldInfo Client::UavFollow(uint32_t uav_id, uint32_t target_id, double altitude, double pitch_down_deg) {
+  return ConfigureWorld(detail::UavFollowRequest(uav_id, target_id, altitude, pitch_down_deg));
+}
+
+proto::WorldInfo Client::UavHold(uint32_t uav_id, double x, double y, double z, double yaw_deg) {
+  return ConfigureWorld(detail::UavHoldRequest(uav_id, x, y, z, yaw_deg));
+}
+
+proto::WorldInfo Client::UavVelocity(uint32_t uav_id, double vx, double vy, double vz, double yaw_rate_deg) {
+  return ConfigureWorld(detail::UavVelocityRequest(uav_id, vx, vy, vz, yaw_rate_deg));
+}
+
+proto::WorldInfo Client::AddCamera(const CameraSetup& camera) { return ConfigureWorld(detail::AddCameraRequest(camera)); }
+
+proto::WorldInfo Client::RemoveCamera(const std::string& name) {
+  return ConfigureWorld(detail::RemoveCameraRequest(name));
+}
+
+proto::WorldInfo Client::Reset() { return ConfigureWorld(detail::ResetRequest()); }
+
+proto::WorldInfo Client::GetWorld() { return ConfigureWorld(detail::GetWorldRequest()); }
+
+proto::RoadQueryResult Client::QueryRoad(double x, double y, uint32_t count, double step,
+                                         std::optional<double> heading_deg) {
+  return std::move(*Configure(detail::QueryRoadRequest(x, y, count, step, heading_deg)).mutable_road());
+}
+
 void Client::SendEnvelope(const Envelope& envelope) {
   RequireConnected();
   const std::size_t body_size = envelope.ByteSizeLong();
@@ -173,13 +251,25 @@ void Client::Close() {
 }
 
 bool Client::ReceiveKind(Envelope::KindCase kind, Envelope& out, Deadline deadline) {
-  if (detail::TakeQueued(pending_, kind, out)) return true;
+  return ReceiveMatching([kind](const Envelope& e) { return e.kind_case() == kind; }, /*errors_interrupt=*/true, out,
+                         deadline);
+}
+
+template <typename Wanted>
+bool Client::ReceiveMatching(const Wanted& wanted, bool errors_interrupt, Envelope& out, Deadline deadline) {
+  // Only Configure queues Errors (those that are not its answer); whoever
+  // waits next meets them in arrival order.
+  const auto stops = [&](const Envelope& e) { return wanted(e) || (errors_interrupt && e.has_error()); };
+  if (detail::TakeQueuedIf(pending_, stops, out)) {
+    if (!wanted(out)) ThrowServerError(out.error());
+    return true;
+  }
   while (ReadEnvelope(deadline)) {
-    if (scratch_.kind_case() == kind) {
+    if (wanted(scratch_)) {
       if (&out != &scratch_) out.Swap(&scratch_);
       return true;
     }
-    if (scratch_.has_error()) ThrowServerError(scratch_.error());
+    if (scratch_.has_error() && (errors_interrupt || scratch_.error().fatal())) ThrowServerError(scratch_.error());
     pending_.push_back(std::move(scratch_));
   }
   return false;
@@ -236,7 +326,7 @@ void Client::ParseScratch(std::size_t size) {
 
 void Client::ThrowServerError(const proto::Error& error) {
   if (error.fatal()) Close();
-  throw ServerError(error.code(), error.message(), error.fatal());
+  throw ServerError(error.code(), error.message(), error.fatal(), error.request_id());
 }
 
 void Client::FailConnection(const std::string& what) {

@@ -1,10 +1,18 @@
 #include "requests.h"
 
-#include <algorithm>
-
 #include "protocol/framing.h"
+#include "sim4cv/client.h"  // CameraSetup
 
 namespace sim4cv::detail {
+namespace {
+
+void SetVec3(proto::Vec3& out, double x, double y, double z) {
+  out.set_x(x);
+  out.set_y(y);
+  out.set_z(z);
+}
+
+}  // namespace
 
 proto::Envelope HelloRequest(const std::string& client_name, uint32_t protocol_version) {
   proto::Envelope envelope;
@@ -52,13 +60,148 @@ proto::Envelope ControlsRequest(uint32_t entity_id, float steering, float thrott
   return envelope;
 }
 
+proto::Configure LoadMapByNameRequest(const std::string& name, const std::string& route, float car_speed) {
+  proto::Configure request;
+  request.mutable_load_map()->set_name(name);
+  request.mutable_load_map()->set_route(route);
+  request.mutable_load_map()->set_car_speed(car_speed);
+  return request;
+}
+
+proto::Configure LoadMapTextRequest(const std::string& text, const std::string& route, float car_speed) {
+  proto::Configure request;
+  request.mutable_load_map()->set_text(text);
+  request.mutable_load_map()->set_route(route);
+  request.mutable_load_map()->set_car_speed(car_speed);
+  return request;
+}
+
+proto::Configure SpawnRequest(proto::EntityKind kind, const std::string& name, double x, double y, double z,
+                              double yaw_deg, bool snap_to_lane) {
+  proto::Configure request;
+  proto::Spawn& spawn = *request.mutable_spawn();
+  spawn.set_kind(kind);
+  spawn.set_name(name);
+  SetVec3(*spawn.mutable_position(), x, y, z);
+  spawn.set_yaw_deg(yaw_deg);
+  spawn.set_snap_to_lane(snap_to_lane);
+  return request;
+}
+
+proto::Configure RemoveRequest(uint32_t entity_id) {
+  proto::Configure request;
+  request.mutable_remove()->set_entity_id(entity_id);
+  return request;
+}
+
+proto::Configure SetRouteRequest(uint32_t entity_id, const std::string& route_name, float speed) {
+  proto::Configure request;
+  proto::SetRoute& route = *request.mutable_set_route();
+  route.set_entity_id(entity_id);
+  route.set_route_name(route_name);
+  route.set_speed(speed);
+  return request;
+}
+
+proto::Configure SetWaypointsRequest(uint32_t entity_id, const std::vector<std::array<double, 2>>& points, bool closed,
+                                     float speed) {
+  proto::Configure request;
+  proto::SetRoute& route = *request.mutable_set_route();
+  route.set_entity_id(entity_id);
+  proto::Waypoints& waypoints = *route.mutable_waypoints();
+  for (const auto& [x, y] : points) {
+    proto::Vec2& point = *waypoints.add_points();
+    point.set_x(x);
+    point.set_y(y);
+  }
+  waypoints.set_closed(closed);
+  route.set_speed(speed);
+  return request;
+}
+
+proto::Configure SetSpeedRequest(uint32_t entity_id, float speed) {
+  proto::Configure request;
+  proto::SetRoute& route = *request.mutable_set_route();
+  route.set_entity_id(entity_id);
+  route.set_keep_route(true);
+  route.set_speed(speed);
+  return request;
+}
+
+proto::Configure UavFollowRequest(uint32_t uav_id, uint32_t target_id, double altitude, double pitch_down_deg) {
+  proto::Configure request;
+  proto::CommandUav& command = *request.mutable_command_uav();
+  command.set_entity_id(uav_id);
+  command.mutable_follow()->set_target_id(target_id);
+  command.mutable_follow()->set_altitude(altitude);
+  command.mutable_follow()->set_pitch_down_deg(pitch_down_deg);
+  return request;
+}
+
+proto::Configure UavHoldRequest(uint32_t uav_id, double x, double y, double z, double yaw_deg) {
+  proto::Configure request;
+  proto::CommandUav& command = *request.mutable_command_uav();
+  command.set_entity_id(uav_id);
+  SetVec3(*command.mutable_hold()->mutable_position(), x, y, z);
+  command.mutable_hold()->set_yaw_deg(yaw_deg);
+  return request;
+}
+
+proto::Configure UavVelocityRequest(uint32_t uav_id, double vx, double vy, double vz, double yaw_rate_deg) {
+  proto::Configure request;
+  proto::CommandUav& command = *request.mutable_command_uav();
+  command.set_entity_id(uav_id);
+  SetVec3(*command.mutable_velocity()->mutable_velocity(), vx, vy, vz);
+  command.mutable_velocity()->set_yaw_rate_deg(yaw_rate_deg);
+  return request;
+}
+
+proto::Configure AddCameraRequest(const CameraSetup& camera) {
+  proto::Configure request;
+  proto::AddCamera& add = *request.mutable_add_camera();
+  add.set_name(camera.name);
+  add.set_mounted_on(camera.mounted_on);
+  add.set_width(camera.width);
+  add.set_height(camera.height);
+  add.set_fov_y_deg(camera.fov_y_deg);
+  add.set_pitch_down_deg(camera.pitch_down_deg);
+  add.set_yaw_deg(camera.yaw_deg);
+  add.set_gimbal(camera.gimbal);
+  SetVec3(*add.mutable_offset(), camera.x, camera.y, camera.z);
+  return request;
+}
+
+proto::Configure RemoveCameraRequest(const std::string& name) {
+  proto::Configure request;
+  request.mutable_remove_camera()->set_name(name);
+  return request;
+}
+
+proto::Configure ResetRequest() {
+  proto::Configure request;
+  request.mutable_reset();
+  return request;
+}
+
+proto::Configure GetWorldRequest() {
+  proto::Configure request;
+  request.mutable_get_world();
+  return request;
+}
+
+proto::Configure QueryRoadRequest(double x, double y, uint32_t count, double step, std::optional<double> heading_deg) {
+  proto::Configure request;
+  proto::QueryRoad& query = *request.mutable_query_road();
+  SetVec3(*query.mutable_point(), x, y, 0.0);
+  query.set_count(count);
+  query.set_step(step);
+  query.set_use_heading(heading_deg.has_value());
+  query.set_heading_deg(heading_deg.value_or(0.0));
+  return request;
+}
+
 bool TakeQueued(std::deque<proto::Envelope>& pending, proto::Envelope::KindCase kind, proto::Envelope& out) {
-  const auto queued =
-      std::find_if(pending.begin(), pending.end(), [kind](const proto::Envelope& e) { return e.kind_case() == kind; });
-  if (queued == pending.end()) return false;
-  out.Swap(&*queued);
-  pending.erase(queued);
-  return true;
+  return TakeQueuedIf(pending, [kind](const proto::Envelope& e) { return e.kind_case() == kind; }, out);
 }
 
 }  // namespace sim4cv::detail

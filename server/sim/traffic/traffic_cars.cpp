@@ -35,6 +35,8 @@ constexpr double kLookAhead = 40.0;            // m along its route that a car l
 constexpr double kClaimDistance = 25.0;        // m: closer than this to a junction, a car going in claims it
 constexpr double kCorridorMargin = 0.3;        // m beyond two half widths: another car is in my lane
 constexpr double kWalkerMargin = 0.6;          // m beyond the bodies: a walker is about to be in my lane
+constexpr double kCrosswalkDepth = (kWalkLines - 1) * kWalkLineSpacing;  // m from the first walking line to the last
+constexpr double kWalkerForesight[] = {0.0, 0.75, 1.5};  // s ahead a car looks at where each walker will be
 constexpr double kEdgeStop = 0.5;              // m before the junction tile, where a car past the stop line yields
 constexpr double kHalfLength = kCarLength / 2;
 constexpr double kCarCorridor = kCarWidth + kCorridorMargin;
@@ -228,12 +230,21 @@ void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::s
     const double their_speed = std::max(0.0, them.speed * std::cos(them.heading - car.heading));
     constraint(*ahead - kCarLength, v - their_speed, kHardGap);
   }
+  // Walkers where they are and where they will be shortly: a car stops for
+  // one about to step into its lane, not only for one already in it.
   for (const Walker& walker : state.walkers) {
-    const Eigen::Vector2d there = walker.position.head<2>();
-    if (!near(there)) continue;
-    if (const std::optional<double> ahead =
-            AheadOnRoute(plan, car, there, kCarWidth / 2 + kWalkerRadius + kWalkerMargin)) {
-      constraint(*ahead - kHalfLength - kWalkerRadius, v, kHardGap);
+    if (!near(walker.position.head<2>())) continue;
+    for (double seconds : kWalkerForesight) {
+      const Eigen::Vector2d there = (walker.position + walker.linear_velocity * seconds).head<2>();
+      const std::optional<double> ahead =
+          AheadOnRoute(plan, car, there, kCarWidth / 2 + kWalkerRadius + kWalkerMargin);
+      // One beside the car is not in its way (and turns back rather than walk
+      // into it: StepWalker). It stops before the whole crosswalk, not on
+      // the walking lines nearer than the walker's.
+      if (ahead && *ahead > kHalfLength) {
+        constraint(*ahead - kHalfLength - kWalkerRadius - kCrosswalkDepth, v, kHardGap);
+        break;
+      }
     }
   }
   for (const Eigen::Vector2d& there : obstacles) {

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "server/common/check.h"
+#include "server/sim/traffic/footprint.h"
 #include "server/sim/traffic/layout_util.h"
 
 namespace sim4cv::traffic {
@@ -14,6 +15,10 @@ namespace {
 // after this long.
 constexpr double kWalkerYieldDeceleration = 3.0;  // m/s^2
 constexpr double kWalkerReaction = 1.0;           // s
+// A walker stops short of a car's body by this much.
+constexpr double kBodyGap = 0.05;  // m
+
+Box2 BodyOf(const MovingCar& car) { return {car.position.head<2>(), car.heading, kCarLength / 2, kCarWidth / 2}; }
 
 void PlaceWalker(const TrafficPlan& plan, Walker& walker, bool walking) {
   const TrafficPlan::WalkPath& path = plan.walk_paths()[walker.path];
@@ -64,6 +69,20 @@ void StepWalker(const TrafficPlan& plan, Walker& walker, double sim_time, double
   }
   const bool at_kerb = walker.direction > 0 ? walker.s <= 0 : walker.s >= path.length;
   if (at_kerb && !MayCross(plan, path, walker, sim_time, cars)) {
+    PlaceWalker(plan, walker, false);
+    return;
+  }
+  // Never into a car: where the next step would bring it closer to a car's
+  // body than kBodyGap, it turns back (a car it stood waiting for might be
+  // waiting for it).
+  const Eigen::Vector2d unit = (path.end - path.start) / path.length;
+  const Eigen::Vector2d here = walker.position.head<2>();
+  const Eigen::Vector2d next = here + unit * (walker.direction * walker.speed * dt);
+  if (std::any_of(cars.begin(), cars.end(), [&](const MovingCar& car) {
+        const double gap = DistanceTo(BodyOf(car), next);
+        return gap < kWalkerRadius + kBodyGap && gap < DistanceTo(BodyOf(car), here);
+      })) {
+    walker.direction = -walker.direction;
     PlaceWalker(plan, walker, false);
     return;
   }

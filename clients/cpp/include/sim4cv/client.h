@@ -5,8 +5,14 @@
 //   client.Connect("127.0.0.1", port);
 //   client.Subscribe("uav", {CHANNEL_RGB, CHANNEL_BOXES}, sim4cv::proto::DELIVERY_LOCKSTEP);
 //   for (...) { const auto& frame = client.StepAndReceive(); ... }
+//
+// It also changes the world (docs/protocol.md, "Configuring the world"):
+//   const uint32_t uav = client.Spawn(proto::ENTITY_KIND_UAV, "uav_b", 0, 0, 20);
+//   client.AddCamera({.name = "uav_b_cam", .mounted_on = "uav_b", .pitch_down_deg = 45, .gimbal = true});
+//   client.UavVelocity(uav, 2, 0, 0);
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -23,13 +29,16 @@ namespace sim4cv {
 // The daemon refused something: carries its code and message.
 class ServerError : public std::runtime_error {
  public:
-  ServerError(proto::ErrorCode code, const std::string& message, bool fatal);
+  ServerError(proto::ErrorCode code, const std::string& message, bool fatal, uint32_t request_id = 0);
   proto::ErrorCode code() const { return code_; }
   bool fatal() const { return fatal_; }
+  // The Configure.request_id the Error answers; 0 for Errors about other messages.
+  uint32_t request_id() const { return request_id_; }
 
  private:
   proto::ErrorCode code_;
   bool fatal_;
+  uint32_t request_id_;
 };
 
 // The connection failed, closed, timed out, or the peer broke the framing.
@@ -49,6 +58,19 @@ struct ImageView {
 
 // The channel's pixels in `frame`, or nullopt if the frame does not carry it.
 std::optional<ImageView> FindImage(const proto::Frame& frame, proto::Channel channel);
+
+// A camera for Client::AddCamera (proto AddCamera; the daemon checks the ranges).
+struct CameraSetup {
+  std::string name;            // unique; what Subscribe names
+  std::string mounted_on;      // an entity's name; empty: fixed in the world at (x, y, z)
+  uint32_t width = 320;        // pixels, 16 .. 1920
+  uint32_t height = 180;       // pixels, 16 .. 1080
+  double fov_y_deg = 60;       // vertical field of view, 10 .. 150
+  double pitch_down_deg = 0;   // below the horizon (gimbal) or the body's forward axis, -90 .. 90
+  double yaw_deg = 0;          // fixed mounts: turned left of the body's forward axis (world-fixed: of east)
+  bool gimbal = false;         // hold the pitch whatever the body's roll and pitch
+  double x = 0, y = 0, z = 0;  // mount point in the body frame (x forward, y left, z up), metres
+};
 
 class Client {
  public:
@@ -90,6 +112,51 @@ class Client {
   // Throws ConnectionError on timeout.
   proto::State GetState(Duration timeout = Duration(5000));
 
+  // Configuring the world (docs/protocol.md, "Configuring the world"): sends
+  // `request` with the next request_id (overwriting the one given) and waits
+  // for the answer carrying that id. Throws ServerError (request_id() set)
+  // if the daemon refuses it, ConnectionError on timeout. Envelopes arriving
+  // meanwhile are queued: Frames for ReceiveFrame, and Errors that are not
+  // this request's answer (e.g. UNKNOWN_CAMERA for a subscription whose
+  // camera was just removed) for the next call that waits, which throws them.
+  proto::Configured Configure(proto::Configure request, Duration timeout = Duration(30000));
+  // Convenience wrappers: one request each, answered with the world after
+  // the change. Same exceptions as Configure.
+  //
+  // Replaces the world with a shipped map, e.g. "tracking/hard_urban" (route
+  // "": the map's first closed route; car_speed 0: the daemon's --car-speed).
+  proto::WorldInfo LoadMapByName(const std::string& name, const std::string& route = "", float car_speed = 0);
+  // The same with the text of a map file (docs/maps.md).
+  proto::WorldInfo LoadMapText(const std::string& text, const std::string& route = "", float car_speed = 0);
+  // Adds a car (at rest, brake on; z ignored) or a UAV (hovering; z above the
+  // ground, >= 0.5 m). name "": "car_<id>" / "uav_<id>". Returns the new id.
+  uint32_t Spawn(proto::EntityKind kind, const std::string& name, double x, double y, double z, double yaw_deg = 0,
+                 bool snap_to_lane = false);
+  proto::WorldInfo Remove(uint32_t entity_id);
+  // A car drives one of the map's routes (WorldInfo.routes), or the given
+  // lane-centre points, at `speed` m/s (0 .. 40).
+  proto::WorldInfo SetRoute(uint32_t entity_id, const std::string& route_name, float speed);
+  proto::WorldInfo SetWaypoints(uint32_t entity_id, const std::vector<std::array<double, 2>>& points, bool closed,
+                                float speed);
+  // Keeps the car's route, changes its speed; 0 stops it.
+  proto::WorldInfo SetSpeed(uint32_t entity_id, float speed);
+  // UAV orders: film `target_id` from behind and above (altitude/pitch 0:
+  // 15 m / 60 deg), hold a point, or fly a world-frame velocity.
+  proto::WorldInfo UavFollow(uint32_t uav_id, uint32_t target_id, double altitude = 0, double pitch_down_deg = 0);
+  proto::WorldInfo UavHold(uint32_t uav_id, double x, double y, double z, double yaw_deg = 0);
+  proto::WorldInfo UavVelocity(uint32_t uav_id, double vx, double vy, double vz, double yaw_rate_deg = 0);
+  proto::WorldInfo AddCamera(const CameraSetup& camera);
+  // Removes a camera AddCamera added; its subscribers get an UNKNOWN_CAMERA Error.
+  proto::WorldInfo RemoveCamera(const std::string& name);
+  // Back to the loaded map's start: time 0, spawned entities and added cameras gone.
+  proto::WorldInfo Reset();
+  proto::WorldInfo GetWorld();
+  // Map scenes only: the nearest lane point to (x, y) (only lanes within 90
+  // degrees of `heading_deg` if given), and `count` points every `step`
+  // metres ahead of it.
+  proto::RoadQueryResult QueryRoad(double x, double y, uint32_t count = 0, double step = 0,
+                                   std::optional<double> heading_deg = std::nullopt);
+
   // Low level: one envelope out, with its length prefix.
   void SendEnvelope(const proto::Envelope& envelope);
   // Low level: raw bytes exactly as given (tests use it to send garbage).
@@ -109,8 +176,16 @@ class Client {
  private:
   using Deadline = std::chrono::steady_clock::time_point;
 
-  // Reads until an envelope of `kind` arrives; others (except Error) queue.
+  // Reads until an envelope of `kind` arrives; others queue. An Error (one
+  // queued before the envelope wanted, or read while waiting) is thrown.
   bool ReceiveKind(proto::Envelope::KindCase kind, proto::Envelope& out, Deadline deadline);
+  // Reads until an envelope `wanted` accepts arrives (queued ones first);
+  // others queue, Errors too unless `errors_interrupt` (fatal ones are
+  // always thrown). Defined in client.cpp, the only user.
+  template <typename Wanted>
+  bool ReceiveMatching(const Wanted& wanted, bool errors_interrupt, proto::Envelope& out, Deadline deadline);
+  // Configure, answered with the world after the change.
+  proto::WorldInfo ConfigureWorld(proto::Configure request);
   // Reads the next envelope off the socket into scratch_. False on timeout; a
   // message cut by a timeout is resumed by the next call.
   bool ReadEnvelope(Deadline deadline);
@@ -123,6 +198,7 @@ class Client {
   std::string peer_;  // "host:port", for error messages
   uint32_t max_message_bytes_ = wire::kDefaultMaxMessageBytes;
   proto::Welcome welcome_;
+  uint32_t last_request_id_ = 0;
   proto::Envelope scratch_;
   proto::Frame frame_;
   std::deque<proto::Envelope> pending_;
