@@ -69,7 +69,10 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
   answer.set_request_id(request.request_id());
   switch (request.request_case()) {
     case Kind::kLoadMap: LoadMap(request.load_map(), change); break;
-    case Kind::kReset: Rebuild(scene_, change); break;
+    case Kind::kReset:
+      RefuseWhileLogging("Reset", "a log's frame ids must increase");
+      Rebuild(scene_, change);
+      break;
     case Kind::kSpawn: answer.set_entity_id(Spawn(request.spawn())); break;
     case Kind::kRemove: RemoveEntity(request.remove().entity_id(), change); break;
     case Kind::kSetRoute: SetRoute(request.set_route()); break;
@@ -86,12 +89,12 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
 }
 
 void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
-  if (!config_.log_file.empty() || !config_.replay_file.empty()) {
-    throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
-                         "LoadMap is refused while the daemon " +
-                             std::string(config_.log_file.empty() ? "replays --replay " + config_.replay_file
-                                                                  : "writes the run log --log " + config_.log_file) +
-                             ": a log holds one map; start another sim4cvd for this map");
+  RefuseWhileLogging("LoadMap", "a log holds one map");
+  if (!config_.replay_file.empty()) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_STATE, "LoadMap is refused while the daemon replays --replay " +
+                                                              config_.replay_file +
+                                                              ": the log was recorded on this map; start another "
+                                                              "sim4cvd for another map");
   }
   std::shared_ptr<const map::Map> loaded;
   if (load.has_name()) {
@@ -99,7 +102,7 @@ void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
     if (!std::filesystem::is_regular_file(path)) {
       throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
                            "LoadMap.name '" + load.name() + "': no such map (looked for " + path +
-                               "); shipped maps are e.g. 'tracking/hard_urban', 'driving/train/train_01_urban'");
+                               "); shipped maps are e.g. 'tracking/hard_urban', 'driving/train/01_urban'");
     }
     loaded = Checked([&] { return std::make_shared<const map::Map>(map::LoadMapFile(path)); });
   } else {
@@ -117,6 +120,14 @@ void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
         sim::SceneFromMap(std::move(loaded), load.route(), speed, config_.width, config_.height));
   });
   Rebuild(std::move(scene), change);
+}
+
+void Simulation::RefuseWhileLogging(const char* request, const char* why) const {
+  if (config_.log_file.empty()) return;
+  throw ConfigureError(proto::ERROR_CODE_INVALID_STATE, std::string(request) +
+                                                            " is refused while the daemon writes the run log --log " +
+                                                            config_.log_file + ": " + why +
+                                                            "; start another sim4cvd without --log for this");
 }
 
 const sim::Agent& Simulation::AgentOf(uint32_t id, const char* what) const {
@@ -290,6 +301,7 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   }
   for (const sim::CameraSpec& camera : cameras_) {
     proto::CameraInfo* info = out.add_cameras();
+    if (camera.name.empty()) continue;  // removed: an empty entry keeps the indices of the rest
     info->set_name(camera.name);
     info->set_width(camera.width);
     info->set_height(camera.height);

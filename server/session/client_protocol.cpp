@@ -74,6 +74,16 @@ Outcome ClientProtocol::Handle(const proto::Envelope& request, proto::Envelope& 
   }
 }
 
+void ClientProtocol::FillWelcome(const ServerContext& context, ClientId client, proto::Welcome& welcome) {
+  welcome = context.welcome;
+  welcome.set_client_id(client);
+  // The world may have changed since the daemon started (Configure).
+  proto::WorldInfo world = context.world.Get();
+  welcome.set_scene_name(world.scene_name());
+  welcome.mutable_cameras()->Swap(world.mutable_cameras());
+  welcome.mutable_entities()->Swap(world.mutable_entities());
+}
+
 Outcome ClientProtocol::HandleHello(const proto::Hello& hello, proto::Envelope& reply) {
   if (handshaken_) {
     return Refuse(proto::ERROR_CODE_INVALID_STATE, "Hello was already accepted on this connection; send it only once",
@@ -88,14 +98,7 @@ Outcome ClientProtocol::HandleHello(const proto::Hello& hello, proto::Envelope& 
   }
   handshaken_ = true;
   client_name_ = hello.client_name();
-  proto::Welcome& welcome = *reply.mutable_welcome();
-  welcome = context_.welcome;
-  welcome.set_client_id(client_);
-  // The world may have changed since the daemon started (Configure).
-  proto::WorldInfo world = context_.world.Get();
-  welcome.set_scene_name(world.scene_name());
-  welcome.mutable_cameras()->Swap(world.mutable_cameras());
-  welcome.mutable_entities()->Swap(world.mutable_entities());
+  FillWelcome(context_, client_, *reply.mutable_welcome());
   LOG_INFO("client " << client_ << " ('" << client_name_ << "') completed the handshake");
   return Outcome::kReply;
 }

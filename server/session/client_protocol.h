@@ -37,6 +37,10 @@ class ClientProtocol {
   // produced it: this class or the sim thread (ClientLink::OfferReply).
   static bool EndsConnection(const proto::Envelope& reply) { return reply.has_error() && reply.error().fatal(); }
 
+  // The Welcome `client` gets: the daemon's fixed settings and the world as
+  // the sim thread last published it.
+  static void FillWelcome(const ServerContext& context, ClientId client, proto::Welcome& welcome);
+
   // The transport delivered one frame; a lockstep client may Step again.
   void OnFrameSent();
 

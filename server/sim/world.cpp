@@ -138,7 +138,7 @@ bool World::Replayed(uint32_t id) const {
 uint32_t World::Spawn(State& state, AgentKind kind, const std::string& name, const SpawnPose& pose) {
   SIM4CV_THROW_UNLESS(pose.position.allFinite() && std::isfinite(pose.yaw),
                       "spawn pose (" << pose.position.transpose() << ", yaw " << pose.yaw << ") is not finite");
-  SIM4CV_THROW_UNLESS(kind != AgentKind::kUav || pose.position.z() > 0.5,
+  SIM4CV_THROW_UNLESS(kind != AgentKind::kUav || pose.position.z() >= 0.5,
                       "a UAV must spawn in the air; z is " << pose.position.z() << " m (at least 0.5)");
   uint32_t id = 1;
   for (const Agent& agent : state.agents) {  // ordered by id: the first gap is the lowest free id
@@ -227,7 +227,7 @@ void World::SetCruiseSpeed(State& state, uint32_t id, float speed) {
 }
 
 void World::SetUavOrder(State& state, uint32_t id, const UavOrder& order) {
-  VehicleOf(state, id, AgentKind::kUav, "UavCommand");
+  VehicleOf(state, id, AgentKind::kUav, "CommandUav");
   if (order.mode == UavOrder::Mode::kFollow) {
     const Agent* target = state.Find(order.target);
     SIM4CV_THROW_UNLESS(target && order.target != id, "UAV " << id << " cannot follow entity " << order.target

@@ -161,11 +161,29 @@ TEST_F(EntitiesTest, ResetBringsTheStartBack) {
   }
 }
 
+TEST_F(EntitiesTest, FramesArrivingWhileAConfigureWaitsAreKept) {
+  auto other = Connect("other");
+  other->Subscribe("uav", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
+  client_->Step();
+  other->Step();
+  proto::Frame frame;
+  // Once `other` has frame 1, it is on its way to client_ as well.
+  ASSERT_TRUE(other->ReceiveFrame(frame, std::chrono::milliseconds(10000)));
+  EXPECT_EQ(client_->Spawn(proto::ENTITY_KIND_UAV, "uav_b", -10, -20, 20), 3u);
+  ASSERT_TRUE(client_->ReceiveFrame(frame, std::chrono::milliseconds(10000)));
+  EXPECT_EQ(frame.frame_id(), 1u);
+  EXPECT_EQ(frame.state().entities_size(), 2) << "rendered before the Spawn";
+  other->Step();
+  const proto::Frame& next = client_->StepAndReceive();
+  EXPECT_EQ(next.frame_id(), 2u);
+  EXPECT_EQ(next.state().entities_size(), 3) << "rendered after the Spawn";
+}
+
 TEST_F(EntitiesTest, ControlsForAnIdThatIsNotACarNameItAndTheWorld) {
   client_->SendControls(kUavId, 0.f, 0.5f, 0.f);
   proto::Error error = NextError(*client_, proto::ERROR_CODE_UNKNOWN_ENTITY);
   EXPECT_EQ(error.request_id(), 0u);
-  for (const char* part : {"entity_id 2", "1 ('car')", "2 ('uav')"}) {
+  for (const char* part : {"entity_id 2", "1 ('car'", "2 ('uav'"}) {
     EXPECT_NE(error.message().find(part), std::string::npos) << "'" << part << "' not in: " << error.message();
   }
   const uint32_t car = client_->Spawn(proto::ENTITY_KIND_CAR, "car_b", 0, -25, 0, 90);

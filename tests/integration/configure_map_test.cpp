@@ -50,7 +50,7 @@ TEST_F(MapTest, LoadMapByNameSwitchesTheSceneAndKeepsTheUavSubscription) {
 
   // The same subscription goes on, in the new world from its frame 1.
   const proto::State start = client_->GetState();
-  for (uint64_t id = 1; id <= 60; ++id) {
+  for (uint64_t id = 1; id <= 150; ++id) {  // 5 s
     const proto::Frame& frame = client_->StepAndReceive();
     ASSERT_EQ(frame.frame_id(), id);
     EXPECT_TRUE(BoxOf(frame, kCarId).has_value()) << "the UAV films the map's car, frame " << id;
@@ -79,12 +79,15 @@ TEST_F(MapTest, LoadMapAsTextAndRefusedMaps) {
   EXPECT_EQ(client_->GetWorld().scene_name(), "tiny") << "a refused LoadMap changes nothing";
 }
 
-TEST_F(MapTest, LoadMapIsRefusedWhileTheDaemonWritesARunLog) {
+// A log holds one map, and its frame ids must increase: neither LoadMap nor
+// Reset may break it.
+TEST_F(MapTest, LoadMapAndResetAreRefusedWhileTheDaemonWritesARunLog) {
   const std::string log = "/tmp/sim4cv-configure-" + std::to_string(getpid()) + ".s4log";
   daemon_->Stop();
   StartDaemon({"--log", log});
   client_ = Connect("logged");
   ExpectRefused([&] { client_->LoadMapByName(kDesert); }, proto::ERROR_CODE_INVALID_STATE, {"--log", log});
+  ExpectRefused([&] { client_->Reset(); }, proto::ERROR_CODE_INVALID_STATE, {"Reset", "--log", log});
   EXPECT_EQ(client_->GetWorld().scene_name(), "default");
   std::filesystem::remove(log);  // the daemon writes on into the unlinked file
 }
@@ -96,9 +99,9 @@ TEST_F(MapTest, SpawnedCarDrivesAMapRouteUntilItsSpeedIsZero) {
   // 60 m ahead of the target car on its lane, turned the wrong way: snapping
   // puts the new car on the lane centre, facing along it.
   const proto::Vec3 target = client_->GetState().entities(0).position();
-  const proto::RoadQueryResult road = client_->QueryRoad(target.x(), target.y(), 1, 60);
-  ASSERT_EQ(road.ahead_size(), 1);
-  const proto::LanePoint& spot = road.ahead(0);
+  const proto::RoadQueryResult road = client_->QueryRoad(target.x(), target.y(), 2, 30);
+  ASSERT_EQ(road.ahead_size(), 2);
+  const proto::LanePoint& spot = road.ahead(1);
   const uint32_t car = client_->Spawn(proto::ENTITY_KIND_CAR, "car_b", spot.position().x() + 1.0,
                                       spot.position().y() + 1.0, 0, spot.heading_deg() + 150, /*snap_to_lane=*/true);
   const proto::Vec3 start = PositionAfter(1, car);

@@ -19,6 +19,7 @@ from .client import (
     decode_length_prefix,
     delivery_value,
     encode_envelope,
+    entity_kind_value,
     encode_length_prefix,
     find_image,
     image_array,
@@ -32,7 +33,7 @@ del _enum, _value
 
 __all__ = [
     "pb", "Client", "ServerError", "ConnectionClosed", "ProtocolError", "FramedSocket",
-    "image_array", "find_image", "channel_value", "delivery_value",
+    "image_array", "find_image", "channel_value", "delivery_value", "entity_kind_value",
     "encode_envelope", "decode_envelope", "encode_length_prefix", "decode_length_prefix",
     "PROTOCOL_VERSION", "DEFAULT_MAX_MESSAGE_BYTES",
 ]

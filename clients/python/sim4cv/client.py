@@ -8,6 +8,12 @@
             frame = c.step_and_receive()
             rgb = image_array(frame, "rgb")      # (h, w, 3) uint8, no copy
 
+It also changes the world (docs/protocol.md, "Configuring the world"):
+
+        uav = c.spawn("uav", "uav_b", 0, 0, 20)
+        c.add_camera("uav_b_cam", mounted_on="uav_b", pitch_down_deg=45, gimbal=True)
+        c.uav_velocity(uav, 2, 0, 0)
+
 Wire format (docs/protocol.md, "Transport and framing"): every Envelope is
 preceded by its serialized size as a 4-byte little-endian unsigned integer.
 """
@@ -20,6 +26,7 @@ import time
 import numpy as np
 
 from ._proto import pb
+from .world import WorldRequests
 
 PROTOCOL_VERSION = 1
 LENGTH_PREFIX_BYTES = 4
@@ -27,22 +34,24 @@ DEFAULT_MAX_MESSAGE_BYTES = 64 << 20  # the daemon's default --max-message-bytes
 
 _PREFIX = struct.Struct("<I")
 
-# Message kinds a client may send / the server sends (Envelope oneof names).
-_SERVER_KINDS = ("welcome", "subscribed", "frame", "state", "error")
+# Message kinds the server sends (Envelope oneof names).
+_SERVER_KINDS = ("welcome", "subscribed", "frame", "state", "error", "stats", "configured")
 
 
 class ServerError(Exception):
     """The daemon answered with an Error envelope.
 
-    code    -- ErrorCode value (compare with sim4cv.pb.ERROR_CODE_*)
-    message -- the server's human-readable explanation
-    fatal   -- True if the server has closed the connection after sending it
+    code       -- ErrorCode value (compare with sim4cv.pb.ERROR_CODE_*)
+    message    -- the server's human-readable explanation
+    fatal      -- True if the server has closed the connection after sending it
+    request_id -- the Configure.request_id it answers; 0 for Errors about other messages
     """
 
-    def __init__(self, code, message, fatal):
+    def __init__(self, code, message, fatal, request_id=0):
         self.code = int(code)
         self.message = message
         self.fatal = bool(fatal)
+        self.request_id = int(request_id)
         super().__init__("%s%s: %s" % (self.code_name, " (fatal)" if self.fatal else "", message))
 
     @property
@@ -207,6 +216,11 @@ def delivery_value(delivery):
     return _enum_value(pb.Delivery, "DELIVERY_", delivery)
 
 
+def entity_kind_value(kind):
+    """ENTITY_KIND_* value for an int or a name such as "car" or "uav"."""
+    return _enum_value(pb.EntityKind, "ENTITY_KIND_", kind)
+
+
 # --------------------------------------------------------------------------
 # Images
 # --------------------------------------------------------------------------
@@ -261,13 +275,16 @@ def image_array(frame, channel):
 # Client
 # --------------------------------------------------------------------------
 
-class Client:
+class Client(WorldRequests):
     """One blocking TCP session with sim4cvd.
 
     Error envelopes are raised as ServerError from whichever call is reading
     when they arrive: Errors are not tied to a request, so an Error caused by
     e.g. send_controls() surfaces from the next receive_frame()/get_state().
-    After a fatal error the client is closed.
+    The exception are the answers to configure() (and the methods built on
+    it), which carry its request_id: configure() raises only its own Error
+    and keeps any other for the next call that reads. After a fatal error
+    the client is closed.
     """
 
     def __init__(self, max_message_bytes=DEFAULT_MAX_MESSAGE_BYTES):
@@ -275,7 +292,10 @@ class Client:
         self.welcome = None
         self.subscribed = None
         self._conn = None
-        self._frames = collections.deque()  # frames read while waiting for something else
+        # Frames read while waiting for something else, and Errors that
+        # configure() read but that were not its answer, in arrival order.
+        self._queued = collections.deque()
+        self._last_request_id = 0
 
     # -- context manager ---------------------------------------------------
     def __enter__(self):
@@ -327,19 +347,31 @@ class Client:
 
     def _receive_kind(self, kind, timeout):
         """Reads until an envelope of `kind` arrives and returns its message.
-        Frames read meanwhile are queued for receive_frame(); an Error is
-        raised as ServerError."""
+        Frames read meanwhile are queued for receive_frame(); an Error (one
+        queued by configure(), or one read now) is raised as ServerError."""
+        for item in self._queued:
+            if isinstance(item, pb.Error):
+                self._queued.remove(item)
+                self._raise(item)
+        return self._receive_until(lambda envelope, which: which == kind, timeout, errors_interrupt=True)
+
+    def _receive_until(self, wanted, timeout, errors_interrupt):
+        """Reads until wanted(envelope, kind_name) and returns that envelope's
+        message. Frames read meanwhile are queued; so are Errors unless
+        `errors_interrupt` (fatal ones are always raised)."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
             envelope = self.receive_envelope(remaining)
             which = envelope.WhichOneof("kind")
-            if which == kind:
-                return getattr(envelope, kind)
+            if wanted(envelope, which):
+                return getattr(envelope, which)
             if which == "error":
-                self._raise(envelope.error)
-            if which == "frame":
-                self._frames.append(envelope.frame)
+                if errors_interrupt or envelope.error.fatal:
+                    self._raise(envelope.error)
+                self._queued.append(envelope.error)
+            elif which == "frame":
+                self._queued.append(envelope.frame)
             elif which in _SERVER_KINDS:
                 pass  # e.g. a late Subscribed/State nobody waits for: ignore
             else:
@@ -349,7 +381,10 @@ class Client:
     def _raise(self, error):
         if error.fatal:
             self.close()
-        raise ServerError(error.code, error.message, error.fatal)
+        raise ServerError(error.code, error.message, error.fatal, error.request_id)
+
+    def _drop_queued_frames(self):
+        self._queued = collections.deque(item for item in self._queued if isinstance(item, pb.Error))
 
     # -- session -----------------------------------------------------------
     def connect(self, host, port, name="python-client", timeout=5.0, protocol_version=PROTOCOL_VERSION):
@@ -375,9 +410,9 @@ class Client:
         envelope.subscribe.delivery = delivery_value(delivery)
         envelope.subscribe.with_state = with_state
         self.send_envelope(envelope)
-        self._frames.clear()
+        self._drop_queued_frames()
         subscribed = self._receive_kind("subscribed", timeout)
-        self._frames.clear()  # frames read before Subscribed belong to the old subscription
+        self._drop_queued_frames()  # frames read before Subscribed belong to the old subscription
         self.subscribed = subscribed
         return subscribed
 
@@ -390,9 +425,12 @@ class Client:
     def receive_frame(self, timeout=10.0):
         """The next Frame (queued ones first). Raises TimeoutError if none
         arrives in `timeout` seconds (None: wait forever), ServerError if an
-        Error arrives first."""
-        if self._frames:
-            return self._frames.popleft()
+        Error arrives (or was queued) first."""
+        if self._queued:
+            item = self._queued.popleft()
+            if isinstance(item, pb.Error):
+                self._raise(item)
+            return item
         return self._receive_kind("frame", timeout)
 
     def step_and_receive(self, timeout=10.0):
@@ -426,11 +464,34 @@ class Client:
         self.send_envelope(envelope)
         return self._receive_kind("state", timeout)
 
+    # -- configuring the world (docs/protocol.md, "Configuring the world") --
+    def configure(self, request, timeout=30.0):
+        """Sends a pb.Configure (its request_id replaced by the next one) and
+        returns the pb.Configured answering it. Raises ServerError (with
+        .request_id) if the daemon refuses it, TimeoutError if no answer
+        comes. Frames, and Errors that are not this request's answer (e.g.
+        UNKNOWN_CAMERA for a subscription whose camera was just removed),
+        are kept for the next call that reads."""
+        self._last_request_id = self._last_request_id % 0xFFFFFFFF + 1  # never 0
+        request_id = self._last_request_id
+        envelope = pb.Envelope()
+        envelope.configure.CopyFrom(request)
+        envelope.configure.request_id = request_id
+        self.send_envelope(envelope)
+
+        def answers(reply, which):
+            return which in ("configured", "error") and getattr(reply, which).request_id == request_id
+
+        answer = self._receive_until(answers, timeout, errors_interrupt=False)
+        if isinstance(answer, pb.Error):
+            self._raise(answer)
+        return answer
+
     def close(self):
         """Closes the connection (the server drops the session at once).
         Safe to call more than once."""
         conn, self._conn = self._conn, None
-        self._frames.clear()
+        self._queued.clear()
         if conn is not None:
             try:
                 conn.sock.close()

@@ -37,7 +37,9 @@ constexpr double kCorridorMargin = 0.3;        // m beyond two half widths: anot
 constexpr double kWalkerMargin = 0.6;          // m beyond the bodies: a walker is about to be in my lane
 constexpr double kCrosswalkDepth = (kWalkLines - 1) * kWalkLineSpacing;  // m from the first walking line to the last
 constexpr double kWalkerForesight[] = {0.0, 0.75, 1.5};  // s ahead a car looks at where each walker will be
-constexpr double kEdgeStop = 0.5;              // m before the junction tile, where a car past the stop line yields
+constexpr double kTailMargin = 0.5;            // m: a car holds a junction until its tail is this far out
+constexpr double kEdgeStop = 0.5;              // m before the junction tile, where a car past the crosswalk gives way
+constexpr double kStopSlack = 0.3;             // m past a stop point that still counts as at it
 constexpr double kHalfLength = kCarLength / 2;
 constexpr double kCarCorridor = kCarWidth + kCorridorMargin;
 
@@ -100,9 +102,42 @@ std::optional<double> AheadOnRoute(const TrafficPlan& plan, const MovingCar& car
   return std::nullopt;
 }
 
-// Whether a car at `speed` can stop within `distance` braking at most kStopDeceleration.
-bool CanStop(double speed, double distance) {
-  return distance > -0.5 && speed * speed <= 2 * kStopDeceleration * std::max(distance, 0.0) + 1e-9;
+// Bumper to bumper along `car`'s route to `other`, if any of other's centre
+// and bumpers lies in its lane corridor ahead: a car crossing ahead, or
+// standing at an angle, reaches into a lane where its centre does not.
+std::optional<double> GapTo(const TrafficPlan& plan, const MovingCar& car, const MovingCar& other) {
+  const Eigen::Vector2d axis(std::cos(other.heading), std::sin(other.heading));
+  const double along = std::cos(other.heading - car.heading), across = std::abs(std::sin(other.heading - car.heading));
+  std::optional<double> gap;
+  for (double offset : {0.0, kHalfLength, -kHalfLength}) {  // centre, front, rear
+    const Eigen::Vector2d point = other.position.head<2>() + axis * offset;
+    const std::optional<double> ahead = AheadOnRoute(plan, car, point, kCarCorridor);
+    if (!ahead) continue;
+    // How far other's body reaches back towards `car` from this point.
+    const double reach_back = (along >= 0 ? offset + kHalfLength : kHalfLength - offset) * std::abs(along) +
+                              kCarWidth / 2 * across;
+    gap = std::min(gap.value_or(std::numeric_limits<double>::infinity()), *ahead - kHalfLength - reach_back);
+  }
+  return gap;
+}
+
+// Where a car that is to stop before a junction `to_junction` ahead halts
+// (metres its centre may still go): the stop line; over that already, the
+// near side of the crosswalk; as a last resort (giving way), the junction
+// tile's edge, braking as hard as it may. None if it cannot stop at any of
+// them. A car already stopping there keeps to its decision.
+std::optional<double> StopPoint(double speed, double to_junction, bool already_stopping, bool last_resort) {
+  const double points[] = {to_junction - kStopLineBack - kHalfLength,
+                           to_junction - kCrosswalkBack - kCrosswalkHalfWidth - kHalfLength,
+                           to_junction - kEdgeStop - kHalfLength};
+  for (int i = 0; i < (last_resort ? 3 : 2); ++i) {
+    const double deceleration = i == 2 ? kMaxDeceleration : kStopDeceleration;
+    if (points[i] > -kStopSlack &&
+        (already_stopping || speed * speed <= 2 * deceleration * std::max(points[i], 0.0) + 1e-9)) {
+      return points[i];
+    }
+  }
+  return std::nullopt;
 }
 
 // Slowing for bends: for each bend within the look-ahead that the car is
@@ -136,7 +171,10 @@ double Interaction(double speed, double gap, double closing) {
 
 void Survey(const TrafficPlan& plan, const MovingCar& car, double sim_time, CarStepWork& work) {
   work = CarStepWork{};
-  work.inside = plan.JunctionOf(car.route[0]) >= 0;
+  // In a junction, or just out of one with its tail still in it.
+  const bool tail_inside =
+      car.came_from >= 0 && plan.JunctionOf(car.came_from) >= 0 && car.lane.s < kHalfLength + kTailMargin;
+  work.inside = plan.JunctionOf(car.route[0]) >= 0 || tail_inside;
   // The next junction on the route, beyond the one the car may be in.
   SegmentId next = -1;
   double to_next = SegmentOf(plan, car.route[0]).length() - car.lane.s;
@@ -150,19 +188,18 @@ void Survey(const TrafficPlan& plan, const MovingCar& car, double sim_time, CarS
   bool held = false;
   if (next >= 0) {
     const int light = plan.LightControlling(next);
-    const double stop_line = to_next - kStopLineBack - kHalfLength;
-    // Yellow or red: stop if it can still stop comfortably (or is already
-    // stopping for it), else go on through.
-    if (light >= 0 && plan.SignalAt(static_cast<std::size_t>(light), sim_time) != Signal::kGreen &&
-        (car.stopping_for == next || CanStop(car.speed, stop_line))) {
-      held = true;
-      work.stop_at = stop_line;
-      work.stopping_for = next;
+    // Yellow or red: stop if it still can, comfortably, else go on through.
+    if (light >= 0 && plan.SignalAt(static_cast<std::size_t>(light), sim_time) != Signal::kGreen) {
+      if (const std::optional<double> at = StopPoint(car.speed, to_next, car.stopping_for == next, false)) {
+        held = true;
+        work.stop_at = *at;
+        work.stopping_for = next;
+      }
     }
   }
   if (work.inside) {
-    work.junction_segment = car.route[0];
-    work.to_junction = -car.lane.s;
+    work.junction_segment = tail_inside ? car.came_from : car.route[0];
+    work.to_junction = tail_inside ? -car.lane.s - SegmentOf(plan, car.came_from).length() : -car.lane.s;
     work.claims = true;
   } else if (next >= 0) {
     work.junction_segment = next;
@@ -196,14 +233,9 @@ void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::s
   CarStepWork& work = state.work[me];
   const double v = car.speed;
   if (work.claims && !work.inside && MustYield(plan, state.work, me)) {
-    const double stop_line = work.to_junction - kStopLineBack - kHalfLength;
-    const double edge = work.to_junction - kHalfLength - kEdgeStop;
     const bool stopping = car.stopping_for == work.junction_segment;
-    if ((stopping && stop_line > -kEdgeStop) || CanStop(v, stop_line)) {
-      work.stop_at = std::min(work.stop_at, stop_line);
-      work.stopping_for = work.junction_segment;
-    } else if (stopping || (edge > -0.5 && v * v <= 2 * kMaxDeceleration * std::max(edge, 0.0))) {
-      work.stop_at = std::min(work.stop_at, edge);
+    if (const std::optional<double> at = StopPoint(v, work.to_junction, stopping, true)) {
+      work.stop_at = std::min(work.stop_at, *at);
       work.stopping_for = work.junction_segment;
     }  // else it is too close to stop: it goes on
   }
@@ -219,16 +251,15 @@ void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::s
   const auto near = [&](const Eigen::Vector2d& p) { return (p - here).norm() <= kLookAhead + kCarLength; };
   for (std::size_t other = 0; other < state.cars.size(); ++other) {
     const MovingCar& them = state.cars[other];
-    const Eigen::Vector2d there = them.position.head<2>();
-    if (other == me || !near(there)) continue;
-    const std::optional<double> ahead = AheadOnRoute(plan, car, there, kCarCorridor);
-    if (!ahead) continue;
+    if (other == me || !near(them.position.head<2>())) continue;
+    const std::optional<double> gap = GapTo(plan, car, them);
+    if (!gap) continue;
     // Each in the other's way (lanes crossing or merging): the one nearer
     // the meeting point goes first.
-    const std::optional<double> behind = AheadOnRoute(plan, them, here, kCarCorridor);
-    if (behind && (*ahead < *behind || (*ahead == *behind && me < other))) continue;
+    const std::optional<double> their_gap = GapTo(plan, them, car);
+    if (their_gap && (*gap < *their_gap || (*gap == *their_gap && me < other))) continue;
     const double their_speed = std::max(0.0, them.speed * std::cos(them.heading - car.heading));
-    constraint(*ahead - kCarLength, v - their_speed, kHardGap);
+    constraint(*gap, v - their_speed, kHardGap);
   }
   // Walkers where they are and where they will be shortly: a car stops for
   // one about to step into its lane, not only for one already in it.
@@ -284,6 +315,7 @@ void Move(const TrafficPlan& plan, MovingCar& car, const CarStepWork& work, doub
   double s = car.lane.s + distance;
   while (s > SegmentOf(plan, car.route[0]).length()) {
     s -= SegmentOf(plan, car.route[0]).length();
+    car.came_from = car.route[0];
     std::copy(car.route.begin() + 1, car.route.end(), car.route.begin());
     car.route.back() = ChooseNext(plan, car.route[kPlannedSegments - 2], car.rng_state);
   }

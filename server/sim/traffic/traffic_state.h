@@ -25,6 +25,7 @@ struct MovingCar {
   // route[0] == lane.segment; then the segments it will drive next, turns
   // at junctions drawn from rng_state as it goes.
   std::array<map::SegmentId, kPlannedSegments> route{};
+  map::SegmentId came_from = -1;  // the segment it drove before route[0], -1 at the start
   double speed = 0.0;         // along the lane, m/s, >= 0
   double cruise_speed = 0.0;  // what it drives at on a free straight road, m/s
   double acceleration = 0.0;  // over the last step, m/s^2 (negative: braking)

@@ -196,8 +196,7 @@ class UdpTransport : public Transport {
         if (request_.hello().protocol_version() == wire::kProtocolVersion) {
           // A repeated Hello: its Welcome may have been lost. Same answer, nothing else changes.
           reply_.Clear();
-          *reply_.mutable_welcome() = context_->welcome;
-          reply_.mutable_welcome()->set_client_id(peer.client());
+          session::ClientProtocol::FillWelcome(*context_, peer.client(), *reply_.mutable_welcome());
           if (Limit(peer, now)) SendReply(peer.address());
           return;
         }

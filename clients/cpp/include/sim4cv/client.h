@@ -61,8 +61,8 @@ std::optional<ImageView> FindImage(const proto::Frame& frame, proto::Channel cha
 
 // A camera for Client::AddCamera (proto AddCamera; the daemon checks the ranges).
 struct CameraSetup {
-  std::string name;            // unique; what Subscribe names
-  std::string mounted_on;      // an entity's name; empty: fixed in the world at (x, y, z)
+  std::string name{};          // unique; what Subscribe names
+  std::string mounted_on{};    // an entity's name; empty: fixed in the world at (x, y, z)
   uint32_t width = 320;        // pixels, 16 .. 1920
   uint32_t height = 180;       // pixels, 16 .. 1080
   double fov_y_deg = 60;       // vertical field of view, 10 .. 150
@@ -99,7 +99,8 @@ class Client {
   // Lockstep: asks for the next frame.
   void Step();
   // Waits for the next Frame. Returns false on timeout. Throws ServerError if
-  // an Error arrives first. The frame stays valid until the next receive.
+  // an Error arrives (or was queued by Configure) first. The frame stays
+  // valid until the next receive.
   bool ReceiveFrame(proto::Frame& frame, Duration timeout = Duration(10000));
   // Step() then ReceiveFrame(); throws ConnectionError on timeout.
   const proto::Frame& StepAndReceive(Duration timeout = Duration(10000));
@@ -129,7 +130,7 @@ class Client {
   // The same with the text of a map file (docs/maps.md).
   proto::WorldInfo LoadMapText(const std::string& text, const std::string& route = "", float car_speed = 0);
   // Adds a car (at rest, brake on; z ignored) or a UAV (hovering; z above the
-  // ground, >= 0.5 m). name "": "car_<id>" / "uav_<id>". Returns the new id.
+  // ground, more than 0.5 m). name "": "car_<id>" / "uav_<id>". Returns the new id.
   uint32_t Spawn(proto::EntityKind kind, const std::string& name, double x, double y, double z, double yaw_deg = 0,
                  bool snap_to_lane = false);
   proto::WorldInfo Remove(uint32_t entity_id);

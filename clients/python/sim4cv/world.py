@@ -1,0 +1,103 @@
+"""The requests that change or inspect the world (docs/protocol.md,
+"Configuring the world"), one method each, as a base class of Client: every
+method builds one pb.Configure and sends it with Client.configure(), which
+matches the answer by request_id and raises ServerError on a refusal.
+"""
+
+from ._proto import pb
+
+
+def _kind_value(kind):
+    from .client import entity_kind_value  # client imports this module
+    return entity_kind_value(kind)
+
+
+class WorldRequests:
+    """Mixed into Client; needs its configure(request) -> pb.Configured."""
+
+    def _configure_world(self, **request):
+        """configure(pb.Configure(**request)) -> the WorldInfo after the change."""
+        return self.configure(pb.Configure(**request)).world
+
+    def load_map_by_name(self, name, route="", car_speed=0.0):
+        """Replaces the world with a shipped map, e.g. "tracking/hard_urban"
+        (route "": its first closed route; car_speed 0: the daemon's
+        --car-speed). Returns the WorldInfo."""
+        return self._configure_world(load_map=pb.LoadMap(name=name, route=route, car_speed=car_speed))
+
+    def load_map_text(self, text, route="", car_speed=0.0):
+        """The same with the text of a map file (docs/maps.md)."""
+        return self._configure_world(load_map=pb.LoadMap(text=text, route=route, car_speed=car_speed))
+
+    def spawn(self, kind, name, x, y, z, yaw_deg=0.0, snap_to_lane=False):
+        """Adds a car (at rest, brake on; z ignored) or a UAV (hovering; z
+        above the ground, > 0.5 m). kind: "car", "uav" or an ENTITY_KIND_*
+        value; name "": "car_<id>" / "uav_<id>". Returns the new entity id."""
+        spawn = pb.Spawn(kind=_kind_value(kind), name=name, position=pb.Vec3(x=x, y=y, z=z),
+                         yaw_deg=yaw_deg, snap_to_lane=snap_to_lane)
+        return self.configure(pb.Configure(spawn=spawn)).entity_id
+
+    def remove(self, entity_id):
+        """Removes an entity (and the cameras mounted on it)."""
+        return self._configure_world(remove=pb.Remove(entity_id=entity_id))
+
+    def set_route(self, entity_id, route_name, speed):
+        """A car drives one of the map's routes (WorldInfo.routes) at `speed` m/s."""
+        return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, route_name=route_name, speed=speed))
+
+    def set_waypoints(self, entity_id, points, closed, speed):
+        """A car drives through lane-centre points [(x, y), ...]: round and
+        round if `closed`, else it stops at the last one."""
+        waypoints = pb.Waypoints(points=[pb.Vec2(x=x, y=y) for x, y in points], closed=closed)
+        return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, waypoints=waypoints, speed=speed))
+
+    def set_speed(self, entity_id, speed):
+        """Keeps the car's route and changes its speed; 0 stops it."""
+        return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, keep_route=True, speed=speed))
+
+    def uav_follow(self, entity_id, target_id, altitude=0.0, pitch_down_deg=0.0):
+        """The UAV films `target_id` from behind and above (0: 15 m, 60 degrees)."""
+        follow = pb.CommandUav.Follow(target_id=target_id, altitude=altitude, pitch_down_deg=pitch_down_deg)
+        return self._configure_world(command_uav=pb.CommandUav(entity_id=entity_id, follow=follow))
+
+    def uav_hold(self, entity_id, x, y, z, yaw_deg=0.0):
+        """The UAV flies to and holds a world position and heading."""
+        hold = pb.CommandUav.Hold(position=pb.Vec3(x=x, y=y, z=z), yaw_deg=yaw_deg)
+        return self._configure_world(command_uav=pb.CommandUav(entity_id=entity_id, hold=hold))
+
+    def uav_velocity(self, entity_id, vx, vy, vz, yaw_rate_deg=0.0):
+        """The UAV flies a world-frame velocity (m/s) and turn rate (degrees/s)."""
+        velocity = pb.CommandUav.Velocity(velocity=pb.Vec3(x=vx, y=vy, z=vz), yaw_rate_deg=yaw_rate_deg)
+        return self._configure_world(command_uav=pb.CommandUav(entity_id=entity_id, velocity=velocity))
+
+    def add_camera(self, name, mounted_on="", width=320, height=180, fov_y_deg=60.0, pitch_down_deg=0.0,
+                   yaw_deg=0.0, gimbal=False, offset=(0.0, 0.0, 0.0)):
+        """Adds a camera on the entity called `mounted_on` (offset in its body
+        frame: x forward, y left, z up), or fixed in the world at `offset`
+        if mounted_on is empty. Subscribe to it by `name`."""
+        x, y, z = offset
+        camera = pb.AddCamera(name=name, mounted_on=mounted_on, width=width, height=height, fov_y_deg=fov_y_deg,
+                              pitch_down_deg=pitch_down_deg, yaw_deg=yaw_deg, gimbal=gimbal,
+                              offset=pb.Vec3(x=x, y=y, z=z))
+        return self._configure_world(add_camera=camera)
+
+    def remove_camera(self, name):
+        """Removes a camera add_camera() added; its subscribers get an
+        UNKNOWN_CAMERA Error."""
+        return self._configure_world(remove_camera=pb.RemoveCamera(name=name))
+
+    def reset(self):
+        """Back to the loaded map's start: time 0, spawned entities and added cameras gone."""
+        return self._configure_world(reset=pb.Reset())
+
+    def get_world(self):
+        """The WorldInfo: scene name, entities, cameras, routes, frame id."""
+        return self._configure_world(get_world=pb.GetWorld())
+
+    def query_road(self, x, y, count=0, step=0.0, heading_deg=None):
+        """Map scenes only: the nearest lane point to (x, y) (only lanes
+        within 90 degrees of heading_deg, if given) and `count` points every
+        `step` metres ahead of it, as a pb.RoadQueryResult."""
+        query = pb.QueryRoad(point=pb.Vec3(x=x, y=y), count=count, step=step,
+                             use_heading=heading_deg is not None, heading_deg=heading_deg or 0.0)
+        return self.configure(pb.Configure(query_road=query)).road

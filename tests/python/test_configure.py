@@ -1,0 +1,129 @@
+"""Integration tests of the Python client's world requests (Client.configure
+and the methods built on it) against the real sim4cvd (fixtures: conftest.py).
+Default scene: car 1 drives the road loop, UAV 2 films it."""
+
+import math
+
+import pytest
+
+import sim4cv
+from sim4cv import ServerError, image_array, pb
+
+CAR_ID = 1
+TIMEOUT_S = 20.0
+
+
+def refused(call, code, *parts):
+    """call() must raise a non-fatal ServerError with `code` that answers a
+    Configure and names every one of `parts`."""
+    with pytest.raises(ServerError) as caught:
+        call()
+    error = caught.value
+    assert error.code == code, error
+    assert not error.fatal and error.request_id != 0, error
+    for part in parts:
+        assert part in error.message, error.message
+    return error
+
+
+def entity(state, entity_id):
+    matches = [e for e in state.entities if e.id == entity_id]
+    return matches[0] if matches else None
+
+
+def test_spawn_get_world_and_remove(connect):
+    client = connect("configure")
+    client.subscribe("uav", ["boxes"], "lockstep", with_state=True)
+    uav = client.spawn("uav", "uav_b", -10, -20, 20)
+    car = client.spawn(sim4cv.ENTITY_KIND_CAR, "car_b", 0, -25, 0, yaw_deg=90)
+    assert (uav, car) == (3, 4)
+    world = client.get_world()
+    assert [(e.id, e.name, e.kind) for e in world.entities] == [
+        (1, "car", pb.ENTITY_KIND_CAR), (2, "uav", pb.ENTITY_KIND_UAV),
+        (uav, "uav_b", pb.ENTITY_KIND_UAV), (car, "car_b", pb.ENTITY_KIND_CAR)]
+
+    # In the frames' State; a velocity order moves the UAV east.
+    client.uav_velocity(uav, 2, 0, 0)
+    for _ in range(60):
+        frame = client.step_and_receive(TIMEOUT_S)
+    flown = entity(frame.state, uav)
+    assert flown.position.x > -10 + 2.0, flown
+    assert abs(flown.position.y + 20) < 0.5, flown
+    assert entity(frame.state, car).name == "car_b"
+
+    refused(lambda: client.spawn("car", "uav_b", 5, -25, 0), pb.ERROR_CODE_INVALID_ARGUMENT, "'uav_b'")
+    refused(lambda: client.remove(99), pb.ERROR_CODE_UNKNOWN_ENTITY, "99")
+    assert [e.name for e in client.remove(uav).entities] == ["car", "uav", "car_b"]
+    assert entity(client.step_and_receive(TIMEOUT_S).state, uav) is None
+
+
+def test_added_camera_delivers_frames_until_removed(connect):
+    client = connect("configure")
+    client.spawn("uav", "uav_b", -40, -60, 20, yaw_deg=90)
+    world = client.add_camera("uav_b_cam", mounted_on="uav_b", width=160, height=120, pitch_down_deg=30)
+    assert [(c.name, c.width, c.height, c.mounted_on) for c in world.cameras][-1] == ("uav_b_cam", 160, 120, "uav_b")
+
+    client.subscribe("uav_b_cam", ["rgb", "depth"], "lockstep")
+    for _ in range(3):
+        frame = client.step_and_receive(TIMEOUT_S)
+        assert frame.camera == "uav_b_cam"
+        assert image_array(frame, "rgb").shape == (120, 160, 3)
+        assert image_array(frame, "depth").shape == (120, 160)
+
+    # The Error about the subscription is not remove_camera()'s answer: it
+    # comes from the next call that reads.
+    world = client.remove_camera("uav_b_cam")
+    assert "uav_b_cam" not in [c.name for c in world.cameras]
+    with pytest.raises(ServerError) as caught:
+        client.receive_frame(TIMEOUT_S)
+    assert caught.value.code == pb.ERROR_CODE_UNKNOWN_CAMERA and caught.value.request_id == 0, caught.value
+    assert len(client.get_state().entities) == 3, "the connection stays usable"
+
+
+def test_frames_arriving_during_configure_are_kept(connect):
+    client, other = connect("configure"), connect("other")
+    client.subscribe("uav", ["boxes"], "lockstep")
+    other.subscribe("uav", ["boxes"], "lockstep")
+    client.step()
+    other.step()
+    # Once `other` has frame 1, the daemon has sent it to `client` too: it
+    # comes in ahead of (or interleaved with) the answer to get_world().
+    assert other.receive_frame(TIMEOUT_S).frame_id == 1
+    assert client.get_world().scene_name == "default"
+    assert client.receive_frame(TIMEOUT_S).frame_id == 1
+    other.step()
+    assert client.step_and_receive(TIMEOUT_S).frame_id == 2
+
+
+def test_query_road_on_a_map(connect):
+    client = connect("configure")
+    refused(lambda: client.query_road(0, 0), pb.ERROR_CODE_INVALID_STATE, "needs a map scene")
+    world = client.load_map_by_name("tracking/easy_desert")
+    assert list(world.routes) == ["loop"]
+    car = entity(client.get_state(), CAR_ID).position
+    at_car = client.query_road(car.x, car.y)
+    assert at_car.distance < 0.05 and len(at_car.ahead) == 0, at_car
+
+    heading = at_car.nearest.heading_deg
+    h = math.radians(heading)
+    x, y = at_car.nearest.position.x - math.sin(h), at_car.nearest.position.y + math.cos(h)
+    left = client.query_road(x, y, count=4, step=2, heading_deg=heading)
+    assert left.lateral_offset == pytest.approx(1.0, abs=0.02), left
+    points = [left.nearest.position] + [p.position for p in left.ahead]
+    assert len(points) == 5
+    for a, b in zip(points, points[1:]):
+        assert math.hypot(b.x - a.x, b.y - a.y) == pytest.approx(2.0, abs=0.05), left
+
+
+def test_configure_errors_name_the_problem(connect):
+    client = connect("configure")
+    refused(lambda: client.load_map_text("sim4cv-map 1\nname broken\ncolour red\n"),
+            pb.ERROR_CODE_INVALID_ARGUMENT, "line 3", "colour")
+    refused(lambda: client.load_map_by_name("../secret"), pb.ERROR_CODE_INVALID_ARGUMENT, "'..'")
+    refused(lambda: client.spawn("uav", "x", math.nan, 0, 20), pb.ERROR_CODE_INVALID_ARGUMENT,
+            "Spawn.position.x is nan")
+    refused(lambda: client.add_camera("big", width=4000), pb.ERROR_CODE_INVALID_ARGUMENT, "AddCamera.width is 4000")
+    refused(lambda: client.configure(pb.Configure()), pb.ERROR_CODE_INVALID_ARGUMENT, "carries no request")
+    refused(lambda: client.set_route(CAR_ID, "loop", 5), pb.ERROR_CODE_INVALID_ARGUMENT, "'loop'", "routes: none")
+    world = client.get_world()
+    assert world.scene_name == "default" and len(world.entities) == 2, "nothing changed"
