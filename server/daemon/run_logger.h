@@ -33,6 +33,8 @@ class RunLogger final : public session::ClientLink {
   // The ground-truth box of the target (the car) in one rendered camera
   // frame of the current simulation frame, if the car is visible in it.
   void OfferFrame(const session::FrameRef& frame) override;
+  // The scheduler's observer, not a client: nobody to answer.
+  void OfferReply(proto::Envelope) override {}
   // Writes the current frame's record: the poses, every client's latest
   // tracker box (with the camera it subscribes to), the boxes gathered by
   // OfferFrame since the last Append, and the car's command.

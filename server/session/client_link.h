@@ -23,11 +23,7 @@ class ClientLink {
   // call; after a fatal Error it closes the client, as for ClientProtocol's.
   // A client that is already gone drops it. May allocate (configuration is
   // rare); the frame path must not.
-  //
-  // Not pure only because the run logger (daemon::RunLogger, the scheduler's
-  // observer) is a ClientLink that no client stands behind and does not
-  // override it yet; every transport's link does. Make this `= 0` once it does.
-  virtual void OfferReply(proto::Envelope reply) { (void)reply; }
+  virtual void OfferReply(proto::Envelope reply) = 0;
 };
 
 }  // namespace sim4cv::session

@@ -44,6 +44,10 @@ class WorldDirectory {
     std::lock_guard lock(mutex_);
     return world_;
   }
+  bool HasCamera(const std::string& name) const {
+    std::string ignored;
+    return FindCamera(name, ignored) >= 0;
+  }
   // Index of the camera called `name`, or -1 and the current names in `names`.
   int FindCamera(const std::string& name, std::string& names) const {
     std::lock_guard lock(mutex_);

@@ -44,6 +44,7 @@ struct FleetRun {
   double min_same_lane = std::numeric_limits<double>::infinity();  // centre to centre, m
   double min_any = std::numeric_limits<double>::infinity();
   int overlaps = 0;           // steps x pairs whose bodies touched
+  double closest_walker = std::numeric_limits<double>::infinity();  // a walker's centre to a car's body
   int junction_entries = 0;   // lit junctions entered
   int entries_on_red = 0;
   int red_waits = 0;          // times a car came to rest before a red light
@@ -77,6 +78,9 @@ FleetRun RunFleet(const TrafficWorld& world, int steps) {
         const double off = world.graph.Nearest(car.position.head<2>(), car.heading).distance;
         run.worst_off_lane_um = std::max(run.worst_off_lane_um, static_cast<int>(std::ceil(off * 1e6)));
       }
+      for (const Walker& w : state.walkers) {
+        run.closest_walker = std::min(run.closest_walker, DistanceTo(BodyOf(car), w.position.head<2>()));
+      }
       for (std::size_t j = i + 1; j < state.cars.size(); ++j) {
         const MovingCar& other = state.cars[j];
         const double distance = (car.position - other.position).norm();
@@ -95,12 +99,13 @@ TEST(TrafficStepTest, FifteenCarsKeepTheirGapsAndTheLightsForTwoMinutes) {
     SCOPED_TRACE(path);
     const TrafficWorld world(LoadShipped(path), Config(15, 0, 20));
     const FleetRun run = RunFleet(world, kTwoMinutes);
-    std::cout << path << ": min same-lane gap " << run.min_same_lane << " m, min any pair " << run.min_any
+    std::cout << path << ": min same-lane gap " << run.min_same_lane << " m, min any pair " << run.min_any << " m, closest walker " << run.closest_walker
               << " m, junction entries " << run.junction_entries << " (on red " << run.entries_on_red
  << "), waits at red " << run.red_waits
               << ", mean speed " << run.mean_speed << " m/s, worst off-lane " << run.worst_off_lane_um << " um\n";
     EXPECT_GE(run.min_same_lane, 5.0);
     EXPECT_EQ(run.overlaps, 0);
+    EXPECT_GE(run.closest_walker, kWalkerRadius);
     EXPECT_EQ(run.entries_on_red, 0);
     EXPECT_GT(run.junction_entries, 20);
     EXPECT_GT(run.red_waits, 5);
@@ -326,32 +331,45 @@ TEST(TrafficStepTest, WalkersStayOnTheirPathsTurnAroundAndCrossOnlyAtRed) {
   EXPECT_GE(shortest_pause, kMinPause - kDt);
 }
 
-TEST(TrafficStepTest, WithoutJunctionsWalkersCrossStraightsFreely) {
-  const TrafficWorld world(LoadShipped("scenes/tracking/hard_urban.map"), Config(5, 0, 8));
-  TrafficState state = InitialTraffic(world.plan);
-  std::vector<int> turns(state.walkers.size(), 0);
-  std::vector<double> stood(state.walkers.size(), 0.0);
-  double shortest = std::numeric_limits<double>::infinity(), longest = 0;
-  for (int step = 0; step < 60 * 60; ++step) {
-    const std::vector<Walker> before = state.walkers;
-    StepTraffic(world.plan, state, step * kDt, kDt, {});
-    for (std::size_t i = 0; i < state.walkers.size(); ++i) {
-      const Walker& w = state.walkers[i];
-      turns[i] += w.direction != before[i].direction;
-      const bool moving = w.linear_velocity.norm() > 0;
-      if (moving && before[i].linear_velocity.norm() == 0 && turns[i] > 0) {
-        shortest = std::min(shortest, stood[i]);
-        longest = std::max(longest, stood[i]);
+TEST(TrafficStepTest, WithoutJunctionsWalkersCrossStraightsPausingAtTheEnds) {
+  // Alone, walkers pause 1-3 s at each end; among cars, they also wait for a gap.
+  for (int cars : {0, 8}) {
+    const TrafficWorld world(LoadShipped("scenes/tracking/hard_urban.map"), Config(cars, 0, 12));
+    TrafficState state = InitialTraffic(world.plan);
+    std::vector<int> turns(state.walkers.size(), 0);
+    std::vector<double> stood(state.walkers.size(), 0.0);
+    double shortest = std::numeric_limits<double>::infinity(), longest = 0;
+    double closest = std::numeric_limits<double>::infinity();  // walker's centre to a car's body
+    for (int step = 0; step < 2 * 60 * 60; ++step) {
+      const std::vector<Walker> before = state.walkers;
+      StepTraffic(world.plan, state, step * kDt, kDt, {});
+      for (std::size_t i = 0; i < state.walkers.size(); ++i) {
+        const Walker& w = state.walkers[i];
+        EXPECT_EQ(world.plan.walk_paths()[w.path].light, -1);
+        if (w.direction != before[i].direction && w.pause_left > 0) {
+          ++turns[i];
+          EXPECT_GE(w.pause_left, kMinPause);
+          EXPECT_LE(w.pause_left, kMaxPause);
+        }
+        const bool moving = w.linear_velocity.norm() > 0;
+        if (moving && before[i].linear_velocity.norm() == 0 && turns[i] > 0) {
+          shortest = std::min(shortest, stood[i]);
+          longest = std::max(longest, stood[i]);
+        }
+        stood[i] = moving ? 0.0 : stood[i] + kDt;
+        for (const MovingCar& car : state.cars) closest = std::min(closest, DistanceTo(BodyOf(car), w.position.head<2>()));
       }
-      stood[i] = moving ? 0.0 : stood[i] + kDt;
     }
+    std::cout << "walkers without lights among " << cars << " cars: each crossed at least "
+              << *std::min_element(turns.begin(), turns.end()) << " times in two minutes, stood " << shortest << " to "
+              << longest << " s at the kerb; closest to a car body " << closest << " m\n";
+    EXPECT_GE(*std::min_element(turns.begin(), turns.end()), cars == 0 ? 8 : 4);
+    EXPECT_GE(shortest, kMinPause - kDt);
+    if (cars == 0) {
+      EXPECT_LE(longest, kMaxPause + kDt);
+    }
+    EXPECT_GE(closest, kWalkerRadius);  // never touching
   }
-  std::cout << "walkers without lights: each turned at least " << *std::min_element(turns.begin(), turns.end())
-            << " times in a minute, stood " << shortest << " to " << longest << " s at the kerb\n";
-  // A crossing of about 9-11 m at 1.1-1.5 m/s and 1-3 s at each end: 4+ in a minute.
-  EXPECT_GE(*std::min_element(turns.begin(), turns.end()), 4);
-  EXPECT_GE(shortest, kMinPause - kDt);
-  EXPECT_LE(longest, kMaxPause + 2 * kDt);
 }
 
 TEST(TrafficStepTest, BadStepIsRefused) {

@@ -227,7 +227,8 @@ std::vector<TrafficPlan::LaneCrossing> TrafficPlan::FindCrossings(const Eigen::V
         const double mid = (lo + hi) / 2;
         ((side(curve.PointAt(mid)) < 0) == (side(curve.PointAt(lo)) < 0) ? lo : hi) = mid;
       }
-      if (within(curve.PointAt(lo))) crossings.push_back({segment.id, lo});
+      const Eigen::Vector2d at = curve.PointAt(lo);
+      if (within(at)) crossings.push_back({segment.id, lo, (at - start).dot(unit)});
     }
   }
   return crossings;

@@ -10,6 +10,7 @@
 #include "server/sim/map/map.h"
 #include "server/sim/map/prng.h"
 #include "server/sim/traffic/footprint.h"
+#include "server/sim/traffic/traffic_config.h"
 
 namespace sim4cv::traffic::layout {
 
@@ -24,6 +25,12 @@ inline map::Prng Stream(uint64_t seed, uint64_t salt) {
   uint64_t state = seed ^ salt;
   return map::Prng(map::SplitMix64(state));
 }
+
+// From a crosswalk's first walking line to its last: a car stopping for a
+// walker stops before the whole crosswalk.
+inline constexpr double kCrosswalkDepth = (kWalkLines - 1) * kWalkLineSpacing;
+// Bumper to walker's body, the least a car keeps (its hard limit).
+inline constexpr double kCarWalkerGap = 1.0;
 
 // To the right of direction d, seen from above.
 inline Eigen::Vector2d RightOf(const Eigen::Vector2d& d) { return {d.y(), -d.x()}; }

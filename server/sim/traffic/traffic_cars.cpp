@@ -35,8 +35,6 @@ constexpr double kLookAhead = 40.0;            // m along its route that a car l
 constexpr double kClaimDistance = 25.0;        // m: closer than this to a junction, a car going in claims it
 constexpr double kCorridorMargin = 0.3;        // m beyond two half widths: another car is in my lane
 constexpr double kWalkerMargin = 0.6;          // m beyond the bodies: a walker is about to be in my lane
-constexpr double kCrosswalkDepth = (kWalkLines - 1) * kWalkLineSpacing;  // m from the first walking line to the last
-constexpr double kWalkerForesight[] = {0.0, 0.75, 1.5};  // s ahead a car looks at where each walker will be
 constexpr double kTailMargin = 0.5;            // m: a car holds a junction until its tail is this far out
 constexpr double kEdgeStop = 0.5;              // m before the junction tile, where a car past the crosswalk gives way
 constexpr double kStopSlack = 0.3;             // m past a stop point that still counts as at it
@@ -121,20 +119,43 @@ std::optional<double> GapTo(const TrafficPlan& plan, const MovingCar& car, const
   return gap;
 }
 
+// How far ahead along `car`'s route a walker on his way across will cross
+// its lane, if he has not crossed it yet (and is walking, not standing at
+// the kerb).
+std::optional<double> CrossingAhead(const TrafficPlan& plan, const MovingCar& car, const Walker& walker) {
+  if (walker.linear_velocity.x() == 0 && walker.linear_velocity.y() == 0) return std::nullopt;
+  constexpr double kClear = kCarWidth / 2 + kWalkerRadius + kCorridorMargin;  // walker past the lane by this much
+  double start = -car.lane.s;
+  for (int k = 0; k < kPlannedSegments && start <= kLookAhead; ++k) {
+    for (const TrafficPlan::LaneCrossing& crossing : plan.walk_paths()[walker.path].crossings) {
+      const double along = start + crossing.s;
+      if (crossing.segment == car.route[k] && along > kHalfLength && along <= kLookAhead &&
+          (crossing.path_s - walker.s) * walker.direction > -kClear) {
+        return along;
+      }
+    }
+    start += SegmentOf(plan, car.route[k]).length();
+  }
+  return std::nullopt;
+}
+
 // Where a car that is to stop before a junction `to_junction` ahead halts
 // (metres its centre may still go): the stop line; over that already, the
 // near side of the crosswalk; as a last resort (giving way), the junction
 // tile's edge, braking as hard as it may. None if it cannot stop at any of
-// them. A car already stopping there keeps to its decision.
+// them.
 std::optional<double> StopPoint(double speed, double to_junction, bool already_stopping, bool last_resort) {
   const double points[] = {to_junction - kStopLineBack - kHalfLength,
                            to_junction - kCrosswalkBack - kCrosswalkHalfWidth - kHalfLength,
                            to_junction - kEdgeStop - kHalfLength};
   for (int i = 0; i < (last_resort ? 3 : 2); ++i) {
-    const double deceleration = i == 2 ? kMaxDeceleration : kStopDeceleration;
-    if (points[i] > -kStopSlack &&
-        (already_stopping || speed * speed <= 2 * deceleration * std::max(points[i], 0.0) + 1e-9)) {
-      return points[i];
+    // Deciding to stop takes a comfortable stop; having decided, it may
+    // brake harder, and halt within the slack, to keep to it (so it does not
+    // change its mind as it creeps up to the point).
+    const double deceleration = (i == 2 || already_stopping) ? kMaxDeceleration : kStopDeceleration;
+    const double room = std::max(points[i] + (already_stopping ? kStopSlack : 0.0), 0.0);
+    if (points[i] > -kStopSlack && speed * speed <= 2 * deceleration * room + 1e-9) {
+      return std::max(points[i], speed * speed / (2 * deceleration));
     }
   }
   return std::nullopt;
@@ -261,21 +282,17 @@ void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::s
     const double their_speed = std::max(0.0, them.speed * std::cos(them.heading - car.heading));
     constraint(*gap, v - their_speed, kHardGap);
   }
-  // Walkers where they are and where they will be shortly: a car stops for
-  // one about to step into its lane, not only for one already in it.
+  // Walkers: one standing in the lane ahead, and one on a crosswalk ahead
+  // who has not yet crossed this car's lane. It stops before the whole
+  // crosswalk, not on the walking lines nearer than the walker's.
   for (const Walker& walker : state.walkers) {
     if (!near(walker.position.head<2>())) continue;
-    for (double seconds : kWalkerForesight) {
-      const Eigen::Vector2d there = (walker.position + walker.linear_velocity * seconds).head<2>();
-      const std::optional<double> ahead =
-          AheadOnRoute(plan, car, there, kCarWidth / 2 + kWalkerRadius + kWalkerMargin);
-      // One beside the car is not in its way (and turns back rather than walk
-      // into it: StepWalker). It stops before the whole crosswalk, not on
-      // the walking lines nearer than the walker's.
-      if (ahead && *ahead > kHalfLength) {
-        constraint(*ahead - kHalfLength - kWalkerRadius - kCrosswalkDepth, v, kHardGap);
-        break;
-      }
+    const std::optional<double> ahead =
+        AheadOnRoute(plan, car, walker.position.head<2>(), kCarWidth / 2 + kWalkerRadius + kWalkerMargin);
+    // One beside the car is not in its way (and turns back rather than walk into it: StepWalker).
+    if (ahead && *ahead > kHalfLength) constraint(*ahead - kHalfLength - kWalkerRadius - layout::kCrosswalkDepth, v, layout::kCarWalkerGap);
+    if (const std::optional<double> crossing = CrossingAhead(plan, car, walker)) {
+      constraint(*crossing - kHalfLength - kWalkerRadius - layout::kCrosswalkDepth, v, layout::kCarWalkerGap);
     }
   }
   for (const Eigen::Vector2d& there : obstacles) {

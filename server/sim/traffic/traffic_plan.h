@@ -46,7 +46,8 @@ class TrafficPlan {
   // Where a lane's centre line crosses a walking line.
   struct LaneCrossing {
     map::SegmentId segment = -1;
-    double s = 0.0;  // arc length along the segment
+    double s = 0.0;       // arc length along the segment
+    double path_s = 0.0;  // and along the walking line, from its start
   };
   // A walking line across the road; a walker goes start -> end -> start ...
   struct WalkPath {

@@ -30,11 +30,15 @@ void PlaceWalker(const TrafficPlan& plan, Walker& walker, bool walking) {
   walker.linear_velocity = Eigen::Vector3d(facing.x(), facing.y(), 0.0) * (walking ? walker.speed : 0.0);
 }
 
-// Whether `car` is on the walking line, or will be there before it could
-// stop comfortably for a walker stepping off now (with a second to react).
+// Whether `car` is on the walking line, or moving and could not stop
+// comfortably (with a second to react) where it stops for walkers: before
+// the whole crosswalk, kCarWalkerGap short of the walker.
 bool CarComing(const TrafficPlan& plan, const TrafficPlan::WalkPath& path, const MovingCar& car) {
   constexpr double kBodyClear = kCarLength / 2 + kWalkerRadius + 0.5;  // centre to line, where bodies are apart
-  const double reach = car.speed * kWalkerReaction + car.speed * car.speed / (2 * kWalkerYieldDeceleration);
+  const double reach =
+      car.speed > 0 ? car.speed * kWalkerReaction + car.speed * car.speed / (2 * kWalkerYieldDeceleration) +
+                          layout::kCrosswalkDepth + layout::kCarWalkerGap
+                    : 0.0;
   double start = -car.lane.s;  // where route[k] starts, from the car's centre
   for (map::SegmentId id : car.route) {
     for (const TrafficPlan::LaneCrossing& crossing : path.crossings) {

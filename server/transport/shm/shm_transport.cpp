@@ -151,7 +151,7 @@ class ShmTransport : public Transport {
           "the " + std::to_string(message.size) + " bytes of a shared-memory reply slot are not a valid Envelope", true,
           reply_);
     } else if (s.welcomed && request_.has_subscribe() && request_.subscribe().camera() != options_.camera &&
-               context_->scene.FindCamera(request_.subscribe().camera()) >= 0) {
+               context_->world.HasCamera(request_.subscribe().camera())) {
       outcome = session::ClientProtocol::Refuse(
           proto::ERROR_CODE_INVALID_ARGUMENT,
           "Subscribe.camera is '" + request_.subscribe().camera() + "' but the shared-memory ring " + options_.name +
