@@ -52,6 +52,12 @@ Usage: sim4cvd [flags]
   --route NAME              the map's closed route the target car drives (default: its first closed route)
   --maps-dir DIR            where a client's LoadMap finds maps by name (default: the source tree's scenes/)
   --car-speed M/S           the target car's set speed on a map (default 6; the paper uses 4, 6 and 8)
+  --traffic-cars N          kinematic traffic cars driving a map's lanes (default 0)
+  --traffic-parked N        cars parked at the kerb of a map's straight roads (default 0)
+  --traffic-pedestrians N   pedestrians walking across a map's crosswalks (default 0)
+  --traffic-lights on|off   traffic lights at the junctions of urban maps (default on; desert maps
+                            never have them)
+  --traffic-seed N          the seed of the traffic's layout and choices (default: --seed)
   --seed N                  seed for every random choice of the simulation (default 1)
   --bind ADDRESS            address the TCP port listens on (default 127.0.0.1; 0.0.0.0 for all)
   --tcp-port N              TCP port; 0 picks any free port (default 0)
@@ -99,6 +105,20 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--map", [&](auto&, auto& v) { config.map_file = v; }},
       {"--route", [&](auto&, auto& v) { config.route = v; }},
       {"--maps-dir", [&](auto&, auto& v) { config.maps_dir = v; }},
+      {"--traffic-cars", [&](auto& f, auto& v) { config.traffic.moving_cars = ParseNumber<int>(f, v, 0, 500); }},
+      {"--traffic-parked", [&](auto& f, auto& v) { config.traffic.parked_cars = ParseNumber<int>(f, v, 0, 2000); }},
+      {"--traffic-pedestrians",
+       [&](auto& f, auto& v) { config.traffic.pedestrians = ParseNumber<int>(f, v, 0, 2000); }},
+      {"--traffic-lights",
+       [&](auto& f, auto& v) {
+         SIM4CV_THROW_UNLESS(v == "on" || v == "off", f << " is '" << v << "'; use on or off");
+         config.traffic.traffic_lights = v == "on";
+       }},
+      {"--traffic-seed",
+       [&](auto& f, auto& v) {
+         config.traffic.seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX);
+         config.traffic_seed_set = true;
+       }},
       {"--car-speed", [&](auto& f, auto& v) { config.car_speed = ParseNumber<float>(f, v, 0.1f, 40.0f); }},
       {"--seed", [&](auto& f, auto& v) { config.seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
       {"--bind", [&](auto&, auto& v) { config.bind_address = v; }},
@@ -155,6 +175,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   SIM4CV_THROW_UNLESS(config.scene_file.empty() || config.map_file.empty(),
                       "--scene and --map both given; pick one");
   SIM4CV_THROW_UNLESS(config.log_label.empty() || !config.log_file.empty(), "--log-label needs --log FILE");
+  if (!config.traffic_seed_set) config.traffic.seed = config.seed;
   SIM4CV_THROW_UNLESS(config.replay_only.empty() || !config.replay_file.empty(),
                       "--replay-only needs --replay FILE: it says which entities follow that log");
   // The writer truncates its file before replay could read it.

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "server/sim/traffic/traffic_config.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::daemon {
@@ -19,6 +20,11 @@ struct Config {
   std::string route;       // the map route the target car drives; empty: the first closed one
   float car_speed = 6.0f;  // m/s, the target car's set speed on a map
   std::string maps_dir = DefaultMapsDir();  // where LoadMap finds shipped maps by name
+  // Traffic on map scenes (docs/maps.md, "Traffic"); applies to every map
+  // loaded, at start or by a client's LoadMap. Its seed is --traffic-seed,
+  // else --seed.
+  traffic::TrafficConfig traffic;
+  bool traffic_seed_set = false;
   uint64_t seed = 1;
   std::string bind_address = "127.0.0.1";
   uint16_t tcp_port = 0;

@@ -50,11 +50,12 @@ int RunDaemon(const Config& config) {
   signal(SIGPIPE, SIG_IGN);  // a client that vanishes must not kill the daemon
   signal(SIGXFSZ, SIG_IGN);  // a run log over the file size limit is a write error, not death
 
-  const auto initial_scene = std::make_shared<const sim::Scene>(
-      !config.map_file.empty()
-          ? sim::SceneFromMap(config.map_file, config.route, config.car_speed, config.width, config.height)
-      : config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
-                                  : sim::LoadSceneFile(config.scene_file, config.width, config.height));
+  sim::Scene loaded = !config.map_file.empty()
+                         ? sim::SceneFromMap(config.map_file, config.route, config.car_speed, config.width, config.height)
+                     : config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
+                                                 : sim::LoadSceneFile(config.scene_file, config.width, config.height);
+  sim::AddTraffic(loaded, config.traffic);
+  const auto initial_scene = std::make_shared<const sim::Scene>(std::move(loaded));
   const sim::Scene& scene = *initial_scene;
 
   std::vector<std::unique_ptr<transport::Transport>> transports;

@@ -116,8 +116,9 @@ void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
   }
   const float speed = load.car_speed() > 0 ? load.car_speed() : config_.car_speed;
   auto scene = Checked([&] {
-    return std::make_shared<const sim::Scene>(
-        sim::SceneFromMap(std::move(loaded), load.route(), speed, config_.width, config_.height));
+    sim::Scene built = sim::SceneFromMap(std::move(loaded), load.route(), speed, config_.width, config_.height);
+    sim::AddTraffic(built, config_.traffic);  // the daemon's --traffic-* flags hold for every map
+    return std::make_shared<const sim::Scene>(std::move(built));
   });
   Rebuild(std::move(scene), change);
 }

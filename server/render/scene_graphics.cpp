@@ -1,5 +1,6 @@
 #include "server/render/scene_graphics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -7,6 +8,7 @@
 #include "server/render/camera_math.h"
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
+#include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/gimbal.h"
 #include "server/sim/world.h"
 
@@ -53,6 +55,22 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     add_static(MakeBox(half, BuildingColour(i)), static_cast<InstanceId>(b.id), proto::OBJECT_CLASS_BUILDING,
                PoseMatrix(Eigen::Vector3f(b.centre.x(), b.centre.y(), half.z()), yaw));
   }
+  if (scene.traffic) {
+    InstanceId first_id = static_cast<InstanceId>(sim::kFirstBuildingId);
+    for (const auto& object : static_labelled_) first_id = std::max<InstanceId>(first_id, object.instance + 1);
+    const auto add_mesh = [&](Mesh mesh) {
+      meshes_.push_back(std::move(mesh));
+      return static_cast<MeshId>(meshes_.size() - 1);
+    };
+    const auto add_labelled = [&](MeshId mesh, InstanceId instance, uint32_t object_class, const Eigen::Matrix4f& pose) {
+      static_labelled_.push_back({instance, object_class, 0});
+      catalog_.AddStatic(instance, object_class, meshes_[mesh], pose);
+      items_.push_back({mesh, pose, instance});
+    };
+    traffic_ = std::make_unique<TrafficGraphics>(*scene.traffic, scene.car.params.chassis_half_extents,
+                                                 vehicles::Car::BoxCentreHeightAtRest(scene.car.params), first_id,
+                                                 add_mesh, add_labelled);
+  }
   static_item_count_ = items_.size();
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();
   // The scene's target car is red, as in the paper; other cars are blue.
@@ -65,6 +83,7 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   // Agents take the ids below the static objects' (sim::kMaxAgentId).
   instance_id_bound_ = sim::kMaxAgentId + 1;
   for (const auto& object : static_labelled_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
+  if (traffic_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, traffic_->id_bound());
 }
 
 void SceneGraphics::Update(const sim::State& state) {
@@ -84,6 +103,7 @@ void SceneGraphics::Update(const sim::State& state) {
                        car ? scene_.car.params.chassis_half_extents : scene_.uav.params.half_extents});
   }
   labelled_.insert(labelled_.end(), static_labelled_.begin(), static_labelled_.end());
+  if (traffic_) traffic_->Append(state.traffic, state.sim_time, items_, labelled_, moving_);
 }
 
 CameraView SceneGraphics::CameraAt(const sim::CameraSpec& spec, const sim::State& state) const {

@@ -4,12 +4,14 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
 #include "server/render/ground_truth.h"
 #include "server/render/object_catalog.h"
 #include "server/render/render_types.h"
+#include "server/render/traffic_graphics.h"
 #include "server/sim/scene.h"
 #include "server/sim/state.h"
 
@@ -53,6 +55,7 @@ class SceneGraphics {
   std::vector<LabelledObject> static_labelled_;
   std::vector<LabelledObject> labelled_;
   std::vector<MovingObject> moving_;
+  std::unique_ptr<TrafficGraphics> traffic_;  // map scenes with traffic only
   ObjectCatalog catalog_;
   std::size_t instance_id_bound_ = 0;
 };

@@ -26,8 +26,8 @@ const Vector3f& Pick(const std::array<Vector3f, N>& palette, uint32_t variant, u
 
 // The housing's front face (x) and its lamps' heights.
 constexpr float kHousingFront = 0.15f;
-constexpr float kLampHalf = 0.11f;     // the dark lamps' half side
-constexpr float kLampDepth = 0.02f;    // how far the dark lamps stand out of the housing
+constexpr float kLampHalf = 0.11f;   // the dark lamps' half side
+constexpr float kLampDepth = 0.02f;  // how far the dark lamps stand out of the housing
 constexpr float kHousingMiddle = 2.6f;
 constexpr float kLampSpacing = 0.3f;
 
@@ -60,10 +60,10 @@ Vector3f DarkColour(Signal signal) { return LitColour(signal) * 0.18f; }
 }  // namespace
 
 Mesh MakePedestrianMesh(uint32_t variant) {
-  static const std::array<Vector3f, 8> kShirts = {
-      Vector3f(0.70f, 0.12f, 0.10f), Vector3f(0.12f, 0.25f, 0.55f), Vector3f(0.85f, 0.85f, 0.80f),
-      Vector3f(0.15f, 0.40f, 0.20f), Vector3f(0.85f, 0.65f, 0.15f), Vector3f(0.30f, 0.30f, 0.32f),
-      Vector3f(0.55f, 0.25f, 0.55f), Vector3f(0.20f, 0.55f, 0.65f)};
+  static const std::array<Vector3f, 8> kShirts = {Vector3f(0.70f, 0.12f, 0.10f), Vector3f(0.12f, 0.25f, 0.55f),
+                                                  Vector3f(0.85f, 0.85f, 0.80f), Vector3f(0.15f, 0.40f, 0.20f),
+                                                  Vector3f(0.85f, 0.65f, 0.15f), Vector3f(0.30f, 0.30f, 0.32f),
+                                                  Vector3f(0.55f, 0.25f, 0.55f), Vector3f(0.20f, 0.55f, 0.65f)};
   static const std::array<Vector3f, 5> kTrousers = {Vector3f(0.10f, 0.12f, 0.25f), Vector3f(0.08f, 0.08f, 0.08f),
                                                     Vector3f(0.40f, 0.33f, 0.22f), Vector3f(0.30f, 0.30f, 0.30f),
                                                     Vector3f(0.20f, 0.28f, 0.45f)};
@@ -80,12 +80,12 @@ Mesh MakePedestrianMesh(uint32_t variant) {
   // faces share a plane (z-fighting) and no gaps show.
   Mesh mesh;
   for (float side : {-1.0f, 1.0f}) {
-    AddBox(mesh, {0.04f, side * 0.1f, 0.04f}, {0.13f, 0.055f, 0.04f}, shoes);  // toes forward: shows the facing
-    AddBox(mesh, {0.0f, side * 0.1f, 0.48f}, {0.075f, 0.07f, 0.41f}, trousers);   // 0.07 .. 0.89 m
-    AddBox(mesh, {0.0f, side * 0.265f, 1.13f}, {0.055f, 0.055f, 0.31f}, shirt);   // arms, 0.82 .. 1.44 m
+    AddBox(mesh, {0.04f, side * 0.1f, 0.04f}, {0.13f, 0.055f, 0.04f}, shoes);    // toes forward: shows the facing
+    AddBox(mesh, {0.0f, side * 0.1f, 0.48f}, {0.075f, 0.07f, 0.41f}, trousers);  // 0.07 .. 0.89 m
+    AddBox(mesh, {0.0f, side * 0.265f, 1.13f}, {0.055f, 0.055f, 0.31f}, shirt);  // arms, 0.82 .. 1.44 m
   }
-  AddBox(mesh, {0.0f, 0.0f, 1.15f}, {0.12f, 0.2f, 0.29f}, shirt);   // torso, 0.86 .. 1.44 m
-  AddBox(mesh, {0.0f, 0.0f, 1.55f}, {0.1f, 0.085f, 0.12f}, skin);   // head (and neck), 1.43 .. 1.67 m
+  AddBox(mesh, {0.0f, 0.0f, 1.15f}, {0.12f, 0.2f, 0.29f}, shirt);        // torso, 0.86 .. 1.44 m
+  AddBox(mesh, {0.0f, 0.0f, 1.55f}, {0.1f, 0.085f, 0.12f}, skin);        // head (and neck), 1.43 .. 1.67 m
   AddBox(mesh, {-0.005f, 0.0f, 1.705f}, {0.105f, 0.09f, 0.045f}, hair);  // 1.66 .. kPedestrianHeight
   return mesh;
 }
@@ -98,16 +98,14 @@ Mesh MakeTrafficLightMesh() {
   AddBox(mesh, {0.0f, 0.0f, kHousingMiddle}, {kHousingFront, 0.18f, housing_half_height}, housing);
   for (Signal signal : {Signal::kRed, Signal::kYellow, Signal::kGreen}) {
     const float z = LampHeight(signal);
-    AddBox(mesh, {kHousingFront + kLampDepth / 2, 0.0f, z}, {kLampDepth / 2, kLampHalf, kLampHalf},
-           DarkColour(signal));
-    AddBox(mesh, {kHousingFront + 0.105f, 0.0f, z + kLampHalf + 0.02f}, {0.1f, 0.13f, 0.01f}, visor);  // 5 mm off the face
+    AddBox(mesh, {kHousingFront + kLampDepth / 2, 0.0f, z}, {kLampDepth / 2, kLampHalf, kLampHalf}, DarkColour(signal));
+    AddBox(mesh, {kHousingFront + 0.105f, 0.0f, z + kLampHalf + 0.02f}, {0.1f, 0.13f, 0.01f},
+           visor);  // 5 mm off the face
   }
   return mesh;
 }
 
-Mesh MakeLampMesh(Signal signal) {
-  return MakeBox({0.005f, kLampHalf - 0.01f, kLampHalf - 0.01f}, LitColour(signal));
-}
+Mesh MakeLampMesh(Signal signal) { return MakeBox({0.005f, kLampHalf - 0.01f, kLampHalf - 0.01f}, LitColour(signal)); }
 
 Eigen::Vector3f LampOffset(Signal signal) {
   // The plate's back face 5 mm in front of the dark lamp's face.

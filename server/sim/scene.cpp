@@ -154,6 +154,18 @@ Scene SceneFromMap(const std::string& map_path, const std::string& route_name, f
                       camera_height);
 }
 
+void AddTraffic(Scene& scene, traffic::TrafficConfig config) {
+  const bool wants_agents = config.moving_cars > 0 || config.parked_cars > 0 || config.pedestrians > 0;
+  if (!scene.map) {
+    SIM4CV_THROW_UNLESS(!wants_agents, "traffic (--traffic-cars, --traffic-parked, --traffic-pedestrians) needs a "
+                                       "tile map (--map); scene '" << scene.name << "' has none");
+    return;
+  }
+  config.traffic_lights = config.traffic_lights && scene.map->surroundings == map::Surroundings::kUrban;
+  if (!wants_agents && !config.traffic_lights) return;
+  scene.traffic = std::make_shared<const traffic::TrafficPlan>(*scene.map, *scene.road_graph, config);
+}
+
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height) {
   std::ifstream in(path);
   SIM4CV_THROW_UNLESS(in, "cannot open scene file '" << path << "'");

@@ -10,6 +10,7 @@
 
 #include "server/sim/map/map.h"
 #include "server/sim/map/road_graph.h"
+#include "server/sim/traffic/traffic_plan.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/quadcopter.h"
 
@@ -68,6 +69,9 @@ struct Scene {
   // buildings are then empty and the map's objects stand in for them.
   std::shared_ptr<const map::Map> map;
   std::shared_ptr<const map::RoadGraph> road_graph;
+  // Map scenes with traffic (AddTraffic): lights, parked and moving cars,
+  // walkers (docs/maps.md, "Traffic"). Null: no traffic.
+  std::shared_ptr<const traffic::TrafficPlan> traffic;
 
   // Index of the camera called `name`, or -1.
   int FindCamera(const std::string& name) const;
@@ -86,6 +90,13 @@ Scene SceneFromMap(const std::string& map_path, const std::string& route_name, f
 // The same for a map already loaded (or parsed from a client's text).
 Scene SceneFromMap(std::shared_ptr<const map::Map> map, const std::string& route_name, float car_speed,
                    uint32_t camera_width, uint32_t camera_height);
+
+// Lays out traffic on a map scene (see TrafficConfig; traffic_lights applies
+// to urban maps only: desert maps are road only, as in the paper). Does
+// nothing when the config asks for no traffic. Throws std::invalid_argument
+// naming the flag and value the map cannot hold, or if the scene has no map
+// but traffic is asked for.
+void AddTraffic(Scene& scene, traffic::TrafficConfig config);
 
 // Reads and parses a scene file.
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height);

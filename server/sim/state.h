@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "server/sim/traffic/traffic_state.h"
+
 namespace sim4cv::sim {
 
 struct BodyState {
@@ -74,6 +76,7 @@ struct State {
   uint64_t physics_steps = 0;  // substeps taken since start
   double sim_time = 0.0;       // seconds
   std::vector<Agent> agents;   // ordered by id
+  traffic::TrafficState traffic;  // the map's moving cars and walkers (empty without traffic)
   std::vector<TrackerReport> tracker_reports;  // one per client that reported, ordered by client id
 
   // The agent with this id, or nullptr.

@@ -119,6 +119,7 @@ World::World(const Scene& scene)
   SIM4CV_DEMAND(Spawn(initial_state_, AgentKind::kUav, scene.uav.name, {station.position, station.yaw}) ==
                 kUavEntityId);
   SetUavOrder(initial_state_, kUavEntityId, follow);
+  if (scene.traffic) initial_state_.traffic = traffic::InitialTraffic(*scene.traffic);
 }
 
 World::~World() = default;
@@ -238,6 +239,9 @@ void World::SetUavOrder(State& state, uint32_t id, const UavOrder& order) {
 
 void World::Step(State& state, double dt) {
   SIM4CV_DEMAND(dt > 0);
+  // Traffic first, from the agents' poses at the step's start, so the cars
+  // below see where the traffic will be and the order is fixed.
+  StepTraffic(state, dt);
   if (replay_ && replay_only_.empty()) {
     FollowReplay(state);
   } else {
@@ -276,6 +280,7 @@ void World::StepPhysics(State& state, double dt) {
         const CarCommand& c = agent.car_command;
         controls = {c.steering, c.throttle, c.brake, false};
       } else {
+        if (scene_.traffic) vehicle.driver->set_speed(SpeedForTraffic(state, agent, vehicle.driver->path()));
         controls = vehicle.driver->Update(vehicle.car->State(), dt);
         agent.car_command = {static_cast<float>(controls.steering), static_cast<float>(controls.throttle),
                              static_cast<float>(controls.brake), false};
@@ -295,6 +300,48 @@ void World::StepPhysics(State& state, double dt) {
     if (Replayed(vehicle.id)) continue;  // State already holds its logged body
     CopyState(vehicle.car ? vehicle.car->State() : vehicle.uav->State(), state.agents[i].body);
   }
+}
+
+void World::StepTraffic(State& state, double dt) {
+  if (!scene_.traffic) return;
+  obstacles_.clear();
+  for (const Agent& agent : state.agents) {
+    if (agent.kind != AgentKind::kCar) continue;
+    const double yaw = agent.body.Yaw();
+    const double speed = agent.body.linear_velocity.head<2>().dot(Eigen::Vector2d(std::cos(yaw), std::sin(yaw)));
+    obstacles_.push_back({agent.body.position.head<2>(), yaw, std::max(0.0, speed)});
+  }
+  traffic::StepTraffic(*scene_.traffic, state.traffic, state.sim_time, dt, obstacles_);
+}
+
+double World::SpeedForTraffic(const State& state, const Agent& car, const vehicles::Polyline& path) const {
+  // Something on the car's own path ahead (within a car's half width plus
+  // the other's of it) is treated as standing: stop `standoff` metres behind
+  // it (centre to centre) with a gentle 3 m/s^2, planning from where it is
+  // now. Measured along the path, so a car round a bend ahead counts too.
+  constexpr double kLookAhead = 35.0, kDeceleration = 3.0;
+  const Eigen::Vector2d from = car.body.position.head<2>();
+  const double s_car = path.Project(from).arc_length;
+  double gap = kLookAhead;
+  const auto consider = [&](const Eigen::Vector2d& p, double half_corridor, double standoff) {
+    if ((p - from).squaredNorm() > kLookAhead * kLookAhead) return;
+    const vehicles::Polyline::Projection on_path = path.ProjectNear(p, s_car, kLookAhead + 5.0);
+    if (on_path.distance > half_corridor) return;
+    double ahead = on_path.arc_length - s_car;
+    if (path.closed() && ahead < -path.length() / 2) ahead += path.length();
+    if (ahead > 0 && ahead < kLookAhead) gap = std::min(gap, ahead - standoff);
+  };
+  for (const traffic::MovingCar& other : state.traffic.cars) consider(other.position.head<2>(), 1.8, 6.0);
+  // A walker on the move may step into the lane: keep a wide berth. One
+  // standing at the kerb waits for this very car to pass (it gives way to
+  // simulated cars), so only one standing in the lane stops it.
+  for (const traffic::Walker& walker : state.traffic.walkers) {
+    const bool walking = walker.linear_velocity.squaredNorm() > 0.0;
+    consider(walker.position.head<2>(), walking ? 2.2 : 1.2, 4.0);
+  }
+  const double cruise = car.cruise_speed;
+  if (gap >= kLookAhead) return cruise;
+  return std::min<double>(cruise, std::sqrt(2.0 * kDeceleration * std::max(0.0, gap)));
 }
 
 }  // namespace sim4cv::sim

@@ -17,6 +17,7 @@
 #include "server/sim/closed_path.h"
 #include "server/sim/scene.h"
 #include "server/sim/state.h"
+#include "server/sim/vehicles/polyline.h"
 
 namespace sim4cv::runlog {
 class ReplayTrack;
@@ -87,6 +88,10 @@ class World {
 
   Vehicle& VehicleOf(const State& state, uint32_t id, AgentKind kind, const char* what);
   void StepPhysics(State& state, double dt);
+  void StepTraffic(State& state, double dt);
+  // Slows a car's waypoint follower for traffic standing or moving ahead on
+  // its path, so it neither drives through a car nor runs down a walker.
+  double SpeedForTraffic(const State& state, const Agent& car, const vehicles::Polyline& path) const;
   void FollowReplay(State& state) const;
   // Whether entity `id` follows the log (only while a replay is set).
   bool Replayed(uint32_t id) const;
@@ -97,6 +102,7 @@ class World {
   State initial_state_;  // taken when the scene's bodies were spawned
   std::shared_ptr<const runlog::ReplayTrack> replay_;
   std::vector<uint32_t> replay_only_;  // sorted; empty: all
+  std::vector<traffic::Obstacle> obstacles_;  // the agents' cars, for traffic: reused every step
 };
 
 // The ids of a State's agents, as "1 ('car'), 2 ('uav')": for Error messages.

@@ -57,7 +57,8 @@ void ExpectLightsAtEveryApproach(const TrafficWorld& world) {
       const double off = world.graph.Nearest(light.position).distance;
       nearest_lane = std::min(nearest_lane, off);
       EXPECT_GE(off, map::kLaneWidth / 2 + 0.5);
-      for (const map::MapObject& object : world.map.objects) EXPECT_GE(DistanceTo(FootprintOf(object), light.position), 0.3);
+      for (const map::MapObject& object : world.map.objects)
+        EXPECT_GE(DistanceTo(FootprintOf(object), light.position), 0.3);
       // It holds exactly the junction's segments entering there.
       for (const map::LaneSegment& segment : world.graph.segments()) {
         const bool entering = segment.tile == tile && segment.entry == entry;
@@ -138,12 +139,12 @@ TEST(TrafficPlanTest, ConflictsAreLanesThatCrossOrMerge) {
   const TrafficWorld world(GridMap(), Config(0, 0, 0));
   const auto id = [&](Edge entry, Edge exit) { return *world.graph.Find({2, 2}, entry, exit); };
   const map::SegmentId north_south = id(Edge::kNorth, Edge::kSouth);
-  EXPECT_TRUE(world.plan.Conflict(north_south, id(Edge::kWest, Edge::kEast)));    // crossing
-  EXPECT_TRUE(world.plan.Conflict(id(Edge::kWest, Edge::kEast), north_south));    // both ways
+  EXPECT_TRUE(world.plan.Conflict(north_south, id(Edge::kWest, Edge::kEast)));                      // crossing
+  EXPECT_TRUE(world.plan.Conflict(id(Edge::kWest, Edge::kEast), north_south));                      // both ways
   EXPECT_TRUE(world.plan.Conflict(id(Edge::kNorth, Edge::kEast), id(Edge::kSouth, Edge::kNorth)));  // left across
-  EXPECT_TRUE(world.plan.Conflict(id(Edge::kSouth, Edge::kEast), id(Edge::kWest, Edge::kEast)));  // merging
-  EXPECT_FALSE(world.plan.Conflict(north_south, id(Edge::kSouth, Edge::kNorth)));  // side by side
-  EXPECT_FALSE(world.plan.Conflict(north_south, id(Edge::kNorth, Edge::kEast)));   // one queue
+  EXPECT_TRUE(world.plan.Conflict(id(Edge::kSouth, Edge::kEast), id(Edge::kWest, Edge::kEast)));    // merging
+  EXPECT_FALSE(world.plan.Conflict(north_south, id(Edge::kSouth, Edge::kNorth)));                   // side by side
+  EXPECT_FALSE(world.plan.Conflict(north_south, id(Edge::kNorth, Edge::kEast)));                    // one queue
   EXPECT_FALSE(world.plan.Conflict(id(Edge::kNorth, Edge::kWest), id(Edge::kSouth, Edge::kEast)));  // two right turns
   const map::SegmentId outside = *world.graph.Find({2, 1}, Edge::kNorth, Edge::kSouth);
   EXPECT_EQ(world.plan.JunctionOf(outside), -1);
@@ -190,7 +191,7 @@ TEST(TrafficPlanTest, ParkedCarsStandAtTheKerbOfStraightsClearOfLanesObjectsAndE
     const Box2 body{parked[i].position, parked[i].heading, kCarLength / 2, kCarWidth / 2};
     EXPECT_EQ(world.map.KindAt(world.map.TileAt(parked[i].position)), map::TileKind::kStraight);
     const map::LaneProjection lane = world.graph.Nearest(parked[i].position, parked[i].heading);
-    EXPECT_NEAR(map::WrapAngle(lane.lane.heading - parked[i].heading), 0.0, 1e-9);  // along its lane
+    EXPECT_NEAR(map::WrapAngle(lane.lane.heading - parked[i].heading), 0.0, 1e-9);    // along its lane
     EXPECT_NEAR(lane.lateral_offset, -(kParkedLateral - map::kLaneWidth / 2), 1e-9);  // on its right
     for (const Eigen::Vector2d& corner : Corners(body)) {
       nearest_lane = std::min(nearest_lane, world.graph.Nearest(corner).distance);
@@ -200,8 +201,8 @@ TEST(TrafficPlanTest, ParkedCarsStandAtTheKerbOfStraightsClearOfLanesObjectsAndE
       EXPECT_FALSE(Overlap(body, {parked[j].position, parked[j].heading, kCarLength / 2, kCarWidth / 2}));
     }
   }
-  std::cout << all << " parked cars on " << world.map.name << ", nearest lane centre to a body corner "
-            << nearest_lane << " m\n";
+  std::cout << all << " parked cars on " << world.map.name << ", nearest lane centre to a body corner " << nearest_lane
+            << " m\n";
   EXPECT_GE(nearest_lane, map::kLaneWidth / 2);  // off the road surface
 }
 
@@ -260,8 +261,8 @@ TEST(TrafficPlanTest, WithoutLightsJunctionsStayButNothingIsHeld) {
 
 TEST(TrafficPlanTest, AnObjectOnTheRoadIsAnObstacleAndNoCarStartsAtIt) {
   // A ring of 3 x 3 tiles with a barrier on the eastbound lane of the bottom row.
-  const map::Map ring = map::ParseMap(
-      "sim4cv-map 1\nname ring\ntile_size 20\ngrid 3 3\n###\n#.#\n###\nend\nobject obstacle 0 -22 0\n");
+  const map::Map ring =
+      map::ParseMap("sim4cv-map 1\nname ring\ntile_size 20\ngrid 3 3\n###\n#.#\n###\nend\nobject obstacle 0 -22 0\n");
   const TrafficWorld probe(ring, Config(0, 0, 0));
   const TrafficWorld world(ring, Config(probe.plan.moving_car_capacity(), 0, 0));
   ASSERT_EQ(world.plan.road_obstacles().size(), 1u);

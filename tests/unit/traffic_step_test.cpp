@@ -27,9 +27,7 @@ using testing::TrafficWorld;
 constexpr double kDt = 1.0 / 60;
 constexpr int kTwoMinutes = 120 * 60;
 
-Box2 BodyOf(const MovingCar& car) {
-  return {car.position.head<2>(), car.heading, kCarLength / 2, kCarWidth / 2};
-}
+Box2 BodyOf(const MovingCar& car) { return {car.position.head<2>(), car.heading, kCarLength / 2, kCarWidth / 2}; }
 
 // Whether b drives in a's lane near a: the same way, and beside a's centre
 // line by less than a lane.
@@ -43,9 +41,9 @@ bool SameLane(const MovingCar& a, const MovingCar& b) {
 struct FleetRun {
   double min_same_lane = std::numeric_limits<double>::infinity();  // centre to centre, m
   double min_any = std::numeric_limits<double>::infinity();
-  int overlaps = 0;           // steps x pairs whose bodies touched
+  int overlaps = 0;                                                 // steps x pairs whose bodies touched
   double closest_walker = std::numeric_limits<double>::infinity();  // a walker's centre to a car's body
-  int junction_entries = 0;   // lit junctions entered
+  int junction_entries = 0;                                         // lit junctions entered
   int entries_on_red = 0;
   int red_waits = 0;          // times a car came to rest before a red light
   int worst_off_lane_um = 0;  // micrometres from the nearest lane centre, sampled each second
@@ -99,10 +97,10 @@ TEST(TrafficStepTest, FifteenCarsKeepTheirGapsAndTheLightsForTwoMinutes) {
     SCOPED_TRACE(path);
     const TrafficWorld world(LoadShipped(path), Config(15, 0, 20));
     const FleetRun run = RunFleet(world, kTwoMinutes);
-    std::cout << path << ": min same-lane gap " << run.min_same_lane << " m, min any pair " << run.min_any << " m, closest walker " << run.closest_walker
-              << " m, junction entries " << run.junction_entries << " (on red " << run.entries_on_red
- << "), waits at red " << run.red_waits
-              << ", mean speed " << run.mean_speed << " m/s, worst off-lane " << run.worst_off_lane_um << " um\n";
+    std::cout << path << ": min same-lane gap " << run.min_same_lane << " m, min any pair " << run.min_any
+              << " m, closest walker " << run.closest_walker << " m, junction entries " << run.junction_entries
+              << " (on red " << run.entries_on_red << "), waits at red " << run.red_waits << ", mean speed "
+              << run.mean_speed << " m/s, worst off-lane " << run.worst_off_lane_um << " um\n";
     EXPECT_GE(run.min_same_lane, 5.0);
     EXPECT_EQ(run.overlaps, 0);
     EXPECT_GE(run.closest_walker, kWalkerRadius);
@@ -154,14 +152,15 @@ TEST(TrafficStepTest, ACarStopsBehindTheStopLineAtRedAndGoesOnGreen) {
     StepTraffic(world.plan, state, t, kDt, {});
     const MovingCar& car = state.cars[0];
     const double front_y = car.position.y() - kCarLength / 2;
-    if (world.plan.SignalAt(approach.light, t) == Signal::kRed) closest = std::min(closest, front_y - approach.stop_line.y());
+    if (world.plan.SignalAt(approach.light, t) == Signal::kRed)
+      closest = std::min(closest, front_y - approach.stop_line.y());
     if (entered < 0 && world.plan.JunctionOf(car.route[0]) >= 0) entered = t;
     if (t < green && t > green - 1) {
       EXPECT_LT(car.speed, 0.05) << "waiting at " << t;
     }
   }
-  std::cout << "red light: front stopped " << closest << " m before the stop line; entered "
-            << entered - green << " s after green\n";
+  std::cout << "red light: front stopped " << closest << " m before the stop line; entered " << entered - green
+            << " s after green\n";
   EXPECT_GE(closest, 0.0);
   EXPECT_LT(closest, 1.0);  // queued at the line, not metres short of it
   EXPECT_GT(entered, green);
@@ -190,15 +189,15 @@ TEST(TrafficStepTest, ObstaclesAheadInTheLaneStopACarOnesBesideItDoNot) {
   const TrafficWorld quiet(GridMap(), no_lights);
   const map::SegmentId start = *quiet.graph.Find({1, 0}, map::Edge::kWest, map::Edge::kEast);
   const map::LanePoint from = quiet.graph.At(start, 0);
-  const std::vector<Eigen::Vector2d> in_lane = {from.position + Eigen::Vector2d(25, 0)};
-  const std::vector<Eigen::Vector2d> oncoming = {from.position + Eigen::Vector2d(25, 4)};
+  const std::vector<Obstacle> in_lane = {{from.position + Eigen::Vector2d(25, 0)}};
+  const std::vector<Obstacle> oncoming = {{from.position + Eigen::Vector2d(25, 4), std::numbers::pi}};
   for (const auto* obstacles : {&in_lane, &oncoming}) {
     TrafficState state;
     state.cars.push_back(CarAt(quiet.plan, start, 0.0, 8.0, 3, 6.0));
     double closest = std::numeric_limits<double>::infinity();
     for (int step = 0; step < 20 * 60; ++step) {
       StepTraffic(quiet.plan, state, step * kDt, kDt, *obstacles);
-      closest = std::min(closest, (state.cars[0].position.head<2>() - obstacles->front()).norm());
+      closest = std::min(closest, (state.cars[0].position.head<2>() - obstacles->front().position).norm());
     }
     if (obstacles == &in_lane) {
       std::cout << "obstacle in lane: the car's centre stopped " << closest << " m from it\n";
@@ -264,7 +263,7 @@ uint64_t HashOf(const TrafficState& state) {
 uint64_t RunHash(uint64_t seed, int steps) {
   const TrafficWorld world(LoadShipped("scenes/driving/val/01_urban.map"), Config(12, 10, 20, seed));
   TrafficState state = InitialTraffic(world.plan);
-  const std::vector<Eigen::Vector2d> obstacles = {world.plan.car_starts().front().lane.position};
+  const std::vector<Obstacle> obstacles = {{world.plan.car_starts().front().lane.position}};
   uint64_t hash = 0;
   for (int step = 0; step < steps; ++step) {
     StepTraffic(world.plan, state, step * kDt, kDt, obstacles);
@@ -282,7 +281,7 @@ TEST(TrafficStepTest, TwoRunsAreBitIdentical) {
 TEST(TrafficStepTest, StepAllocatesNothingOnceWarm) {
   const TrafficWorld world(LoadShipped("scenes/driving/train/01_urban.map"), Config(15, 10, 30));
   TrafficState state = InitialTraffic(world.plan);
-  const std::vector<Eigen::Vector2d> obstacles = {Eigen::Vector2d(0, 0)};
+  const std::vector<Obstacle> obstacles = {{Eigen::Vector2d(0, 0)}};
   StepTraffic(world.plan, state, 0.0, kDt, obstacles);
   int step = 1;
   const std::size_t allocations = sim4cv::testing::AllocationsIn([&] {
@@ -312,7 +311,9 @@ TEST(TrafficStepTest, WalkersStayOnTheirPathsTurnAroundAndCrossOnlyAtRed) {
       if (w.direction != before[i].direction) ++turns[i];
       const bool moving = w.linear_velocity.norm() > 0;
       if (moving) {
-        ASSERT_NEAR(std::abs(map::WrapAngle(w.heading - std::atan2(unit.y(), unit.x()) - (w.direction < 0 ? std::numbers::pi : 0))), 0.0, 1e-9);
+        ASSERT_NEAR(std::abs(map::WrapAngle(w.heading - std::atan2(unit.y(), unit.x()) -
+                                            (w.direction < 0 ? std::numbers::pi : 0))),
+                    0.0, 1e-9);
         ASSERT_GE(w.speed, kMinWalkSpeed);
         ASSERT_LE(w.speed, kMaxWalkSpeed);
       }
@@ -357,7 +358,8 @@ TEST(TrafficStepTest, WithoutJunctionsWalkersCrossStraightsPausingAtTheEnds) {
           longest = std::max(longest, stood[i]);
         }
         stood[i] = moving ? 0.0 : stood[i] + kDt;
-        for (const MovingCar& car : state.cars) closest = std::min(closest, DistanceTo(BodyOf(car), w.position.head<2>()));
+        for (const MovingCar& car : state.cars)
+          closest = std::min(closest, DistanceTo(BodyOf(car), w.position.head<2>()));
       }
     }
     std::cout << "walkers without lights among " << cars << " cars: each crossed at least "
@@ -372,7 +374,7 @@ TEST(TrafficStepTest, WithoutJunctionsWalkersCrossStraightsPausingAtTheEnds) {
   }
 }
 
-TEST(TrafficStepTest, BadStepIsRefused) {
+TEST(TrafficStepTest, BadStepsAndCarsAreRefused) {
   const TrafficWorld world(GridMap(), Config(1, 0, 0));
   TrafficState state = InitialTraffic(world.plan);
   try {
@@ -381,6 +383,9 @@ TEST(TrafficStepTest, BadStepIsRefused) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("-0.5"), std::string::npos) << e.what();
   }
+  EXPECT_THROW(CarAt(world.plan, 0, 0.0, 0.0, 1), std::invalid_argument);
+  EXPECT_THROW(CarAt(world.plan, 0, 0.0, 6.0, 1, -1.0), std::invalid_argument);
+  EXPECT_THROW(CarAt(world.plan, 100000, 0.0, 6.0, 1), std::invalid_argument);
 }
 
 }  // namespace

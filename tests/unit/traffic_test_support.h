@@ -17,9 +17,7 @@ inline std::filesystem::path SourceDir() {
   return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path();
 }
 
-inline map::Map LoadShipped(const std::string& relative) {
-  return map::LoadMapFile((SourceDir() / relative).string());
-}
+inline map::Map LoadShipped(const std::string& relative) { return map::LoadMapFile((SourceDir() / relative).string()); }
 
 // A 5 x 5 grid of 20 m tiles: four bends in the corners, four T-junctions
 // on the sides, a crossroads in the middle, straights between.

@@ -204,12 +204,14 @@ void TrafficPlan::AddCrosswalk(const map::Map& map, const Eigen::Vector2d& middl
 }
 
 std::vector<TrafficPlan::LaneCrossing> TrafficPlan::FindCrossings(const Eigen::Vector2d& start,
-                                                                   const Eigen::Vector2d& end) const {
+                                                                  const Eigen::Vector2d& end) const {
   const double length = (end - start).norm();
   const Eigen::Vector2d unit = (end - start) / length;
   // Signed distance from the walking line's carrier, and whether the foot of
   // the perpendicular falls on the line itself.
-  const auto side = [&](const Eigen::Vector2d& p) { return unit.x() * (p.y() - start.y()) - unit.y() * (p.x() - start.x()); };
+  const auto side = [&](const Eigen::Vector2d& p) {
+    return unit.x() * (p.y() - start.y()) - unit.y() * (p.x() - start.x());
+  };
   const auto within = [&](const Eigen::Vector2d& p) {
     const double along = (p - start).dot(unit);
     return along >= 0 && along <= length;

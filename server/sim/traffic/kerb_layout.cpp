@@ -30,9 +30,7 @@ Box2 WalkBox(const TrafficPlan::WalkPath& path) {
           kWalkerRadius};
 }
 
-Box2 CarBox(const Eigen::Vector2d& centre, double heading) {
-  return {centre, heading, kCarLength / 2, kCarWidth / 2};
-}
+Box2 CarBox(const Eigen::Vector2d& centre, double heading) { return {centre, heading, kCarLength / 2, kCarWidth / 2}; }
 
 // Distance from p to the nearest lane centre among the segments of `tile`
 // and its eight neighbours (nothing further can be nearer than they are).

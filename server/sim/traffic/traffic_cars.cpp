@@ -12,6 +12,7 @@
 #include <limits>
 #include <optional>
 
+#include "server/common/check.h"
 #include "server/sim/traffic/layout_util.h"
 #include "server/sim/traffic/traffic_state.h"
 
@@ -20,24 +21,24 @@ namespace {
 
 using map::SegmentId;
 
-constexpr double kMaxAcceleration = 2.0;       // m/s^2, speeding up (IDM's a)
-constexpr double kComfortDeceleration = 4.0;   // m/s^2, braking as a habit (IDM's b)
-constexpr double kStopDeceleration = 6.0;      // a car stops for yellow, red or a yield only if this suffices
-constexpr double kMaxDeceleration = 8.0;       // m/s^2, the hardest braking, to keep clear of others
-constexpr double kStandingGap = 2.5;           // m bumper to bumper when queued (IDM's s0)
-constexpr double kHardGap = 1.0;               // m bumper to bumper a step never closes below
+constexpr double kMaxAcceleration = 2.0;      // m/s^2, speeding up (IDM's a)
+constexpr double kComfortDeceleration = 4.0;  // m/s^2, braking as a habit (IDM's b)
+constexpr double kStopDeceleration = 6.0;     // a car stops for yellow, red or a yield only if this suffices
+constexpr double kMaxDeceleration = 8.0;      // m/s^2, the hardest braking, to keep clear of others
+constexpr double kStandingGap = 2.5;          // m bumper to bumper when queued (IDM's s0)
+constexpr double kHardGap = 1.0;              // m bumper to bumper a step never closes below
 // s of following distance (IDM's T). At least sqrt(2 s0 / a) = 1.58 s, or
 // a car closing on a stop line or a standing car overshoots (IDM is then
 // under-damped about its standing gap).
 constexpr double kHeadway = 1.6;
-constexpr double kLateralAcceleration = 2.0;   // m/s^2 in bends: the speed limit of a radius r is sqrt(2 r)
-constexpr double kLookAhead = 40.0;            // m along its route that a car looks at
-constexpr double kClaimDistance = 25.0;        // m: closer than this to a junction, a car going in claims it
-constexpr double kCorridorMargin = 0.3;        // m beyond two half widths: another car is in my lane
-constexpr double kWalkerMargin = 0.6;          // m beyond the bodies: a walker is about to be in my lane
-constexpr double kTailMargin = 0.5;            // m: a car holds a junction until its tail is this far out
-constexpr double kEdgeStop = 0.5;              // m before the junction tile, where a car past the crosswalk gives way
-constexpr double kStopSlack = 0.3;             // m past a stop point that still counts as at it
+constexpr double kLateralAcceleration = 2.0;  // m/s^2 in bends: the speed limit of a radius r is sqrt(2 r)
+constexpr double kLookAhead = 40.0;           // m along its route that a car looks at
+constexpr double kClaimDistance = 25.0;       // m: closer than this to a junction, a car going in claims it
+constexpr double kCorridorMargin = 0.3;       // m beyond two half widths: another car is in my lane
+constexpr double kWalkerMargin = 0.6;         // m beyond the bodies: a walker is about to be in my lane
+constexpr double kTailMargin = 0.5;           // m: a car holds a junction until its tail is this far out
+constexpr double kEdgeStop = 0.5;             // m before the junction tile, where a car past the crosswalk gives way
+constexpr double kStopSlack = 0.3;            // m past a stop point that still counts as at it
 constexpr double kHalfLength = kCarLength / 2;
 constexpr double kCarCorridor = kCarWidth + kCorridorMargin;
 
@@ -112,8 +113,8 @@ std::optional<double> GapTo(const TrafficPlan& plan, const MovingCar& car, const
     const std::optional<double> ahead = AheadOnRoute(plan, car, point, kCarCorridor);
     if (!ahead) continue;
     // How far other's body reaches back towards `car` from this point.
-    const double reach_back = (along >= 0 ? offset + kHalfLength : kHalfLength - offset) * std::abs(along) +
-                              kCarWidth / 2 * across;
+    const double reach_back =
+        (along >= 0 ? offset + kHalfLength : kHalfLength - offset) * std::abs(along) + kCarWidth / 2 * across;
     gap = std::min(gap.value_or(std::numeric_limits<double>::infinity()), *ahead - kHalfLength - reach_back);
   }
   return gap;
@@ -249,7 +250,7 @@ bool MustYield(const TrafficPlan& plan, const std::vector<CarStepWork>& work, st
   return false;
 }
 
-void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::span<const Eigen::Vector2d> obstacles) {
+void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::span<const Obstacle> obstacles) {
   const MovingCar& car = state.cars[me];
   CarStepWork& work = state.work[me];
   const double v = car.speed;
@@ -290,12 +291,14 @@ void Decide(const TrafficPlan& plan, TrafficState& state, std::size_t me, std::s
     const std::optional<double> ahead =
         AheadOnRoute(plan, car, walker.position.head<2>(), kCarWidth / 2 + kWalkerRadius + kWalkerMargin);
     // One beside the car is not in its way (and turns back rather than walk into it: StepWalker).
-    if (ahead && *ahead > kHalfLength) constraint(*ahead - kHalfLength - kWalkerRadius - layout::kCrosswalkDepth, v, layout::kCarWalkerGap);
+    if (ahead && *ahead > kHalfLength)
+      constraint(*ahead - kHalfLength - kWalkerRadius - layout::kCrosswalkDepth, v, layout::kCarWalkerGap);
     if (const std::optional<double> crossing = CrossingAhead(plan, car, walker)) {
       constraint(*crossing - kHalfLength - kWalkerRadius - layout::kCrosswalkDepth, v, layout::kCarWalkerGap);
     }
   }
-  for (const Eigen::Vector2d& there : obstacles) {
+  for (const Obstacle& obstacle : obstacles) {
+    const Eigen::Vector2d& there = obstacle.position;
     if (!near(there)) continue;
     if (const std::optional<double> ahead = AheadOnRoute(plan, car, there, kCarCorridor)) {
       constraint(*ahead - kCarLength, v, kHardGap);  // its speed is unknown: taken as standing
@@ -343,6 +346,9 @@ void Move(const TrafficPlan& plan, MovingCar& car, const CarStepWork& work, doub
 
 MovingCar CarAt(const TrafficPlan& plan, SegmentId segment, double s, double cruise_speed, uint64_t rng_seed,
                 double speed) {
+  SIM4CV_THROW_UNLESS(std::isfinite(cruise_speed) && cruise_speed > 0,
+                      "a moving car's cruise speed " << cruise_speed << " m/s must be > 0");
+  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0, "a moving car's speed " << speed << " m/s must be >= 0");
   MovingCar car;
   car.route[0] = plan.graph().segment(segment).id;  // throws for a segment the map does not have
   car.rng_state = rng_seed;
@@ -353,8 +359,8 @@ MovingCar CarAt(const TrafficPlan& plan, SegmentId segment, double s, double cru
   return car;
 }
 
-void StepCars(const TrafficPlan& plan, TrafficState& state, double sim_time, double dt,
-              std::span<const Eigen::Vector2d> obstacles) {
+void detail::StepCars(const TrafficPlan& plan, TrafficState& state, double sim_time, double dt,
+                      std::span<const Obstacle> obstacles) {
   if (state.work.size() != state.cars.size()) state.work.resize(state.cars.size());
   for (std::size_t i = 0; i < state.cars.size(); ++i) Survey(plan, state.cars[i], sim_time, state.work[i]);
   for (std::size_t i = 0; i < state.cars.size(); ++i) Decide(plan, state, i, obstacles);

@@ -10,14 +10,14 @@ namespace sim4cv::traffic {
 // From the daemon's flags or the protocol. TrafficPlan checks it and throws
 // std::invalid_argument naming the flag (the names below) and its value.
 struct TrafficConfig {
-  int moving_cars = 0;          // --traffic-cars: kinematic cars driving the lanes
-  int parked_cars = 0;          // --traffic-parked: static cars at the kerb of straight road tiles
-  int pedestrians = 0;          // --traffic-pedestrians: walkers on crosswalk paths
-  bool traffic_lights = true;   // --traffic-lights: one signal per junction approach
-  uint64_t seed = 1;            // --traffic-seed: every random choice of the plan and of the cars
-  double green_s = 8.0;         // --traffic-green: seconds each axis of a junction has green (> 0)
-  double yellow_s = 2.0;        // --traffic-yellow: seconds of yellow after green (>= 0)
-  double all_red_s = 1.0;       // --traffic-all-red: seconds both axes are red between (>= 0)
+  int moving_cars = 0;         // --traffic-cars: kinematic cars driving the lanes
+  int parked_cars = 0;         // --traffic-parked: static cars at the kerb of straight road tiles
+  int pedestrians = 0;         // --traffic-pedestrians: walkers on crosswalk paths
+  bool traffic_lights = true;  // --traffic-lights: one signal per junction approach
+  uint64_t seed = 1;           // --traffic-seed: every random choice of the plan and of the cars
+  double green_s = 8.0;        // --traffic-green: seconds each axis of a junction has green (> 0)
+  double yellow_s = 2.0;       // --traffic-yellow: seconds of yellow after green (>= 0)
+  double all_red_s = 1.0;      // --traffic-all-red: seconds both axes are red between (>= 0)
 };
 
 // A pose on the ground: z = 0, turned `heading` radians counter-clockwise

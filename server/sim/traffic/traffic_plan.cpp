@@ -20,8 +20,7 @@ TrafficPlan::TrafficPlan(const map::Map& map, const map::RoadGraph& graph, const
 void TrafficPlan::CheckConfig() const {
   SIM4CV_THROW_UNLESS(config_.moving_cars >= 0, "--traffic-cars " << config_.moving_cars << ": must be >= 0");
   SIM4CV_THROW_UNLESS(config_.parked_cars >= 0, "--traffic-parked " << config_.parked_cars << ": must be >= 0");
-  SIM4CV_THROW_UNLESS(config_.pedestrians >= 0,
-                      "--traffic-pedestrians " << config_.pedestrians << ": must be >= 0");
+  SIM4CV_THROW_UNLESS(config_.pedestrians >= 0, "--traffic-pedestrians " << config_.pedestrians << ": must be >= 0");
   SIM4CV_THROW_UNLESS(std::isfinite(config_.green_s) && config_.green_s > 0,
                       "--traffic-green " << config_.green_s << ": must be a time > 0 s");
   SIM4CV_THROW_UNLESS(std::isfinite(config_.yellow_s) && config_.yellow_s >= 0,
@@ -41,9 +40,9 @@ void TrafficPlan::ChooseStarts(const map::Map& map) {
 
   const std::vector<map::LanePoint> lanes = FindStartSlots();
   moving_car_capacity_ = static_cast<int>(lanes.size());
-  SIM4CV_THROW_UNLESS(config_.moving_cars <= moving_car_capacity_,
-                      "--traffic-cars " << config_.moving_cars << ": the map's lanes hold at most "
-                                        << moving_car_capacity_ << " cars");
+  SIM4CV_THROW_UNLESS(
+      config_.moving_cars <= moving_car_capacity_,
+      "--traffic-cars " << config_.moving_cars << ": the map's lanes hold at most " << moving_car_capacity_ << " cars");
   map::Prng car_rng = layout::Stream(config_.seed, layout::kCarStream);
   for (int i : layout::Choose(moving_car_capacity_, config_.moving_cars, car_rng)) {
     CarStart start;
@@ -68,7 +67,8 @@ void TrafficPlan::ChooseStarts(const map::Map& map) {
 }
 
 TrafficPlan::SignalPhase TrafficPlan::PhaseAt(std::size_t light, double sim_time) const {
-  SIM4CV_THROW_UNLESS(light < lights_.size(), "no traffic light " << light << " (the plan has " << lights_.size() << ")");
+  SIM4CV_THROW_UNLESS(light < lights_.size(),
+                      "no traffic light " << light << " (the plan has " << lights_.size() << ")");
   const Light& l = lights_[light];
   const double cycle = cycle_s();
   const double half = cycle / 2;

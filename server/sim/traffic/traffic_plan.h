@@ -32,11 +32,11 @@ class TrafficPlan {
   // coming in, kLightLateral off the road's centre line and about
   // kLightBack before the junction tile.
   struct Light {
-    Eigen::Vector2d position{0, 0};  // the pole's foot (z = 0)
-    double heading = 0.0;            // where the lamps face: back along the arm, at the traffic coming in
-    int junction = 0;                // index into junctions()
+    Eigen::Vector2d position{0, 0};       // the pole's foot (z = 0)
+    double heading = 0.0;                 // where the lamps face: back along the arm, at the traffic coming in
+    int junction = 0;                     // index into junctions()
     map::Edge entry = map::Edge::kNorth;  // the junction tile's side that traffic enters through
-    int axis = 0;                    // 0: entry north or south; 1: east or west. The axes alternate.
+    int axis = 0;                         // 0: entry north or south; 1: east or west. The axes alternate.
     // The junction's straight-on segment entering through `entry` (its first
     // one where there is none). Every segment entering there is held: see
     // LightControlling.
@@ -56,7 +56,8 @@ class TrafficPlan {
     // The light of the junction arm it crosses: walkers set off only while
     // it is red. -1 without lights or for a crosswalk in mid-block.
     int light = -1;
-    // Every lane it crosses, so a walker can tell whether a car is coming.
+    // Every lane it crosses: a walker checks them for cars coming, a car for
+    // walkers about to cross its lane.
     std::vector<LaneCrossing> crossings;
   };
 

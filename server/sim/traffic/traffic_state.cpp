@@ -15,10 +15,28 @@ namespace {
 // after this long.
 constexpr double kWalkerYieldDeceleration = 3.0;  // m/s^2
 constexpr double kWalkerReaction = 1.0;           // s
-// A walker stops short of a car's body by this much.
+// A walker turns back rather than come closer than this to a car's body.
 constexpr double kBodyGap = 0.05;  // m
 
 Box2 BodyOf(const MovingCar& car) { return {car.position.head<2>(), car.heading, kCarLength / 2, kCarWidth / 2}; }
+Box2 BodyOf(const Obstacle& car) { return {car.position, car.heading, kCarLength / 2, kCarWidth / 2}; }
+
+// Whether a simulated car is on the walking line or could be there within
+// the crossing's time: it is not driven by traffic rules (it may not stop
+// for a light), so a walker gives way to it whatever the signal says.
+bool ObstacleComing(const TrafficPlan::WalkPath& path, const Obstacle& car, double walker_speed) {
+  const Eigen::Vector2d unit = (path.end - path.start) / path.length;
+  const Eigen::Vector2d to_car = car.position - path.start;
+  const double along = std::clamp(to_car.dot(unit), 0.0, path.length);
+  const Eigen::Vector2d closest = path.start + unit * along;
+  const Eigen::Vector2d forward(std::cos(car.heading), std::sin(car.heading));
+  const double distance = (car.position - closest).norm();
+  if (DistanceTo(BodyOf(car), closest) < 1.0) return true;  // on the line already
+  const bool approaching = forward.dot(closest - car.position) > 0;
+  // Where it could be by the time the walker is across, with a car length to spare.
+  const double reach = car.speed * (path.length / walker_speed + kWalkerReaction) + kCarLength;
+  return approaching && distance < reach;
+}
 
 void PlaceWalker(const TrafficPlan& plan, Walker& walker, bool walking) {
   const TrafficPlan::WalkPath& path = plan.walk_paths()[walker.path];
@@ -35,10 +53,10 @@ void PlaceWalker(const TrafficPlan& plan, Walker& walker, bool walking) {
 // the whole crosswalk, kCarWalkerGap short of the walker.
 bool CarComing(const TrafficPlan& plan, const TrafficPlan::WalkPath& path, const MovingCar& car) {
   constexpr double kBodyClear = kCarLength / 2 + kWalkerRadius + 0.5;  // centre to line, where bodies are apart
-  const double reach =
-      car.speed > 0 ? car.speed * kWalkerReaction + car.speed * car.speed / (2 * kWalkerYieldDeceleration) +
-                          layout::kCrosswalkDepth + layout::kCarWalkerGap
-                    : 0.0;
+  const double reach = car.speed > 0
+                           ? car.speed * kWalkerReaction + car.speed * car.speed / (2 * kWalkerYieldDeceleration) +
+                                 layout::kCrosswalkDepth + layout::kCarWalkerGap
+                           : 0.0;
   double start = -car.lane.s;  // where route[k] starts, from the car's centre
   for (map::SegmentId id : car.route) {
     for (const TrafficPlan::LaneCrossing& crossing : path.crossings) {
@@ -54,7 +72,11 @@ bool CarComing(const TrafficPlan& plan, const TrafficPlan::WalkPath& path, const
 // arm only while its light is red, with time to get across before it turns
 // green (or at the very start of a red too short for anyone to get across in).
 bool MayCross(const TrafficPlan& plan, const TrafficPlan::WalkPath& path, const Walker& walker, double sim_time,
-              std::span<const MovingCar> cars) {
+              std::span<const MovingCar> cars, std::span<const Obstacle> obstacles) {
+  if (std::any_of(obstacles.begin(), obstacles.end(),
+                  [&](const Obstacle& car) { return ObstacleComing(path, car, walker.speed); })) {
+    return false;
+  }
   if (path.light >= 0) {
     const TrafficPlan::SignalPhase phase = plan.PhaseAt(static_cast<std::size_t>(path.light), sim_time);
     if (phase.signal != Signal::kRed) return false;
@@ -64,7 +86,8 @@ bool MayCross(const TrafficPlan& plan, const TrafficPlan::WalkPath& path, const 
   return std::none_of(cars.begin(), cars.end(), [&](const MovingCar& car) { return CarComing(plan, path, car); });
 }
 
-void StepWalker(const TrafficPlan& plan, Walker& walker, double sim_time, double dt, std::span<const MovingCar> cars) {
+void StepWalker(const TrafficPlan& plan, Walker& walker, double sim_time, double dt, std::span<const MovingCar> cars,
+                std::span<const Obstacle> obstacles) {
   const TrafficPlan::WalkPath& path = plan.walk_paths()[walker.path];
   if (walker.pause_left > 0) {
     walker.pause_left = std::max(0.0, walker.pause_left - dt);
@@ -72,7 +95,7 @@ void StepWalker(const TrafficPlan& plan, Walker& walker, double sim_time, double
     return;
   }
   const bool at_kerb = walker.direction > 0 ? walker.s <= 0 : walker.s >= path.length;
-  if (at_kerb && !MayCross(plan, path, walker, sim_time, cars)) {
+  if (at_kerb && !MayCross(plan, path, walker, sim_time, cars, obstacles)) {
     PlaceWalker(plan, walker, false);
     return;
   }
@@ -82,10 +105,12 @@ void StepWalker(const TrafficPlan& plan, Walker& walker, double sim_time, double
   const Eigen::Vector2d unit = (path.end - path.start) / path.length;
   const Eigen::Vector2d here = walker.position.head<2>();
   const Eigen::Vector2d next = here + unit * (walker.direction * walker.speed * dt);
-  if (std::any_of(cars.begin(), cars.end(), [&](const MovingCar& car) {
-        const double gap = DistanceTo(BodyOf(car), next);
-        return gap < kWalkerRadius + kBodyGap && gap < DistanceTo(BodyOf(car), here);
-      })) {
+  const auto too_close = [&](const Box2& body) {
+    const double gap = DistanceTo(body, next);
+    return gap < kWalkerRadius + kBodyGap && gap < DistanceTo(body, here);
+  };
+  if (std::any_of(cars.begin(), cars.end(), [&](const MovingCar& car) { return too_close(BodyOf(car)); }) ||
+      std::any_of(obstacles.begin(), obstacles.end(), [&](const Obstacle& car) { return too_close(BodyOf(car)); })) {
     walker.direction = -walker.direction;
     PlaceWalker(plan, walker, false);
     return;
@@ -125,11 +150,11 @@ TrafficState InitialTraffic(const TrafficPlan& plan) {
 }
 
 void StepTraffic(const TrafficPlan& plan, TrafficState& state, double sim_time, double dt,
-                 std::span<const Eigen::Vector2d> obstacles) {
+                 std::span<const Obstacle> obstacles) {
   SIM4CV_THROW_UNLESS(std::isfinite(dt) && dt > 0, "traffic step of " << dt << " s: must be > 0");
   // Cars first: they look at the walkers where they stand at the step's start.
-  StepCars(plan, state, sim_time, dt, obstacles);
-  for (Walker& walker : state.walkers) StepWalker(plan, walker, sim_time, dt, state.cars);
+  detail::StepCars(plan, state, sim_time, dt, obstacles);
+  for (Walker& walker : state.walkers) StepWalker(plan, walker, sim_time, dt, state.cars, obstacles);
 }
 
 }  // namespace sim4cv::traffic

@@ -26,9 +26,9 @@ struct MovingCar {
   // at junctions drawn from rng_state as it goes.
   std::array<map::SegmentId, kPlannedSegments> route{};
   map::SegmentId came_from = -1;  // the segment it drove before route[0], -1 at the start
-  double speed = 0.0;         // along the lane, m/s, >= 0
-  double cruise_speed = 0.0;  // what it drives at on a free straight road, m/s
-  double acceleration = 0.0;  // over the last step, m/s^2 (negative: braking)
+  double speed = 0.0;             // along the lane, m/s, >= 0
+  double cruise_speed = 0.0;      // what it drives at on a free straight road, m/s
+  double acceleration = 0.0;      // over the last step, m/s^2 (negative: braking)
   // The junction segment it has decided to stop before (a light that is not
   // green, or a car it gives way to), -1 if none. The decision holds until it
   // may go, so a car creeping up to its line does not change its mind.
@@ -37,7 +37,7 @@ struct MovingCar {
   // none, and since when (sim time, s): junctions are first come, first served.
   map::SegmentId claimed = -1;
   double claimed_since = 0.0;
-  uint64_t rng_state = 0;     // its own splitmix64 stream
+  uint64_t rng_state = 0;                              // its own splitmix64 stream
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // z = 0: the caller adds the body's height
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
   double heading = 0.0;   // radians, = lane.heading
@@ -45,11 +45,11 @@ struct MovingCar {
 };
 
 struct Walker {
-  int path = 0;          // index into plan.walk_paths()
-  double s = 0.0;        // metres from the path's start
-  int direction = 1;     // +1 walking towards its end, -1 back towards its start
-  double speed = 0.0;    // m/s while walking
-  double pause_left = 0.0;  // s still to stand at the kerb; at 0 it walks, or waits for red
+  int path = 0;             // index into plan.walk_paths()
+  double s = 0.0;           // metres from the path's start
+  int direction = 1;        // +1 walking towards its end, -1 back towards its start
+  double speed = 0.0;       // m/s while walking
+  double pause_left = 0.0;  // s still to stand at the kerb; at 0 it walks, or waits for red and a gap
   uint64_t rng_state = 0;   // its own splitmix64 stream (pause lengths)
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // feet, z = 0
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
@@ -61,13 +61,21 @@ struct Walker {
 struct CarStepWork {
   map::SegmentId junction_segment = -1;  // the junction segment it is in, or the next one on its route
   double to_junction = std::numeric_limits<double>::infinity();  // from its centre to that segment's start
-  bool inside = false;  // in a junction now
-  bool claims = false;  // inside, or going to enter (not held by a light) within the claim distance
+  bool inside = false;                                           // in a junction now
+  bool claims = false;         // inside, or going to enter (not held by a light) within the claim distance
   double claimed_since = 0.0;  // sim time it began to claim junction_segment
   double stop_at = std::numeric_limits<double>::infinity();  // metres it may go before a stop line or yield point
   map::SegmentId stopping_for = -1;  // what stop_at stops it before (becomes MovingCar::stopping_for)
   double acceleration = 0.0;
   double free_distance = std::numeric_limits<double>::infinity();  // the most it may move this step
+};
+
+// A vehicle traffic does not move but must keep clear of: a car the World
+// simulates (the target car, spawned cars), as an oriented car-sized box.
+struct Obstacle {
+  Eigen::Vector2d position{0, 0};  // its centre
+  double heading = 0.0;            // radians, counter-clockwise from east
+  double speed = 0.0;              // forward, m/s
 };
 
 struct TrafficState {
@@ -85,15 +93,18 @@ MovingCar CarAt(const TrafficPlan& plan, map::SegmentId segment, double s, doubl
 TrafficState InitialTraffic(const TrafficPlan& plan);
 
 // Advances by `dt` seconds (> 0) from `sim_time` (the time at the step's
-// start, which the lights are read at). `obstacles` are the positions of
-// other vehicles (the simulated, physics-driven ones): a moving car treats
-// one lying ahead in its lane corridor as a standing car and stops behind
-// it. Allocates nothing once state.work matches state.cars.
+// start, which the lights are read at). `obstacles` are the other vehicles
+// (the simulated, physics-driven ones): a moving car treats one lying ahead
+// in its lane corridor as a standing car and stops behind it; a walker
+// neither steps off the kerb while one is on or coming at its crosswalk nor
+// walks into one. Allocates nothing once state.work matches state.cars.
 void StepTraffic(const TrafficPlan& plan, TrafficState& state, double sim_time, double dt,
-                 std::span<const Eigen::Vector2d> obstacles);
+                 std::span<const Obstacle> obstacles);
 
-// The moving-car half of StepTraffic (traffic_cars.cpp).
+namespace detail {
+// The moving-car half of StepTraffic (traffic_cars.cpp); call StepTraffic.
 void StepCars(const TrafficPlan& plan, TrafficState& state, double sim_time, double dt,
-              std::span<const Eigen::Vector2d> obstacles);
+              std::span<const Obstacle> obstacles);
+}  // namespace detail
 
 }  // namespace sim4cv::traffic

@@ -105,11 +105,14 @@ Car::Car(btDiscreteDynamicsWorld& world, const CarParams& params, const Eigen::V
   Reset(position, yaw, ground_z);
 }
 
+double Car::BoxCentreHeightAtRest(const CarParams& params) {
+  // Wheel radius + static suspension length above the ground, plus the
+  // depth of the suspension tops below the box centre.
+  return params.wheel_radius + StaticSuspensionLength(params) - params.suspension_top_z;
+}
+
 btTransform Car::SpawnPose(const Eigen::Vector2d& position, double yaw, double ground_z) const {
-  // The box centre sits wheel radius + static suspension length above the
-  // ground, plus the depth of the suspension tops below it.
-  const double box_centre_z =
-      ground_z + params_.wheel_radius + StaticSuspensionLength(params_) - params_.suspension_top_z;
+  const double box_centre_z = ground_z + BoxCentreHeightAtRest(params_);
   const btQuaternion rotation(btVector3(0, 0, 1), btScalar(yaw));
   const btVector3 box_centre(btScalar(position.x()), btScalar(position.y()), btScalar(box_centre_z));
   return btTransform(rotation, box_centre - btVector3(0, 0, btScalar(params_.center_of_mass_drop)));

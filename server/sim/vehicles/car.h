@@ -91,6 +91,10 @@ class Car {
   const CarParams& params() const { return params_; }
   btRigidBody& chassis() { return chassis_.body(); }
 
+  // How high the chassis box's centre stands above flat ground at rest:
+  // where kinematic cars of the same model (traffic) are drawn.
+  static double BoxCentreHeightAtRest(const CarParams& params);
+
  private:
   btTransform SpawnPose(const Eigen::Vector2d& position, double yaw, double ground_z) const;
   Eigen::Vector3d BoxCentreInBody() const { return {0.0, 0.0, params_.center_of_mass_drop}; }
