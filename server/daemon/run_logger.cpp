@@ -8,6 +8,15 @@
 namespace sim4cv::daemon {
 namespace {
 
+uint16_t ObjectClassOf(sim::AgentKind kind) {
+  switch (kind) {
+    case sim::AgentKind::kCar: return runlog::kObjectClassCar;
+    case sim::AgentKind::kUav: return runlog::kObjectClassUav;
+    case sim::AgentKind::kPedestrian: return runlog::kObjectClassPedestrian;
+  }
+  return 0;
+}
+
 runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, const sim::State& initial) {
   runlog::RunLogHeader header;
   header.creator = "sim4cvd " SIM4CV_VERSION;
@@ -20,9 +29,7 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   // The entities and cameras at the start; records hold every entity
   // present at their frame, so ones spawned later appear there by id.
   for (const sim::Agent& agent : initial.agents) {
-    const bool car = agent.kind == sim::AgentKind::kCar;
-    header.entities.push_back({agent.id, agent.name, car ? runlog::kEntityKindCar : runlog::kEntityKindUav,
-                               car ? runlog::kObjectClassCar : runlog::kObjectClassUav});
+    header.entities.push_back({agent.id, agent.name, static_cast<uint16_t>(agent.kind), ObjectClassOf(agent.kind)});
   }
   for (const auto& camera : scene.cameras) {
     const sim::Agent* mount = initial.FindByName(camera.mounted_on);

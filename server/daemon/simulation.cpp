@@ -143,7 +143,7 @@ const sim::Agent& Simulation::AgentOf(uint32_t id, const char* what) const {
 
 uint32_t Simulation::Spawn(const proto::Spawn& spawn) {
   sim::SpawnPose pose{{spawn.position().x(), spawn.position().y(), spawn.position().z()}, spawn.yaw_deg() * kDegrees};
-  const auto kind = spawn.kind() == proto::ENTITY_KIND_CAR ? sim::AgentKind::kCar : sim::AgentKind::kUav;
+  const auto kind = static_cast<sim::AgentKind>(spawn.kind());  // CheckConfigure let only the three kinds through
   if (spawn.snap_to_lane() && kind == sim::AgentKind::kCar) {
     if (!scene_->road_graph) {
       throw ConfigureError(proto::ERROR_CODE_INVALID_STATE, "Spawn.snap_to_lane needs a map scene; scene '" +

@@ -8,6 +8,7 @@
 #include "server/render/camera_math.h"
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
+#include "server/render/traffic_meshes.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/gimbal.h"
 #include "server/sim/world.h"
@@ -80,6 +81,8 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   meshes_.push_back(MakeUavMesh(2.0f * static_cast<float>(scene.uav.params.half_extents.x()), {0.15f, 0.15f, 0.18f}));
   uav_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
+  meshes_.push_back(MakePedestrianMesh(0));
+  pedestrian_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   // Agents take the ids below the static objects' (sim::kMaxAgentId).
   instance_id_bound_ = sim::kMaxAgentId + 1;
   for (const auto& object : static_labelled_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
@@ -91,8 +94,16 @@ void SceneGraphics::Update(const sim::State& state) {
   labelled_.clear();
   moving_.clear();
   for (const sim::Agent& agent : state.agents) {
-    const bool car = agent.kind == sim::AgentKind::kCar;
     const auto instance = static_cast<InstanceId>(agent.id);
+    if (agent.kind == sim::AgentKind::kPedestrian) {
+      // Its body stands on its feet; its box is centred half its height up.
+      items_.push_back({pedestrian_mesh_, BodyPose(agent.body), instance});
+      labelled_.push_back({instance, proto::OBJECT_CLASS_PEDESTRIAN, 0});
+      moving_.push_back({instance, proto::OBJECT_CLASS_PEDESTRIAN, agent.body.position + kPedestrianBox.z() * Eigen::Vector3d::UnitZ(),
+                         agent.body.orientation, agent.body.linear_velocity, agent.body.angular_velocity, kPedestrianBox});
+      continue;
+    }
+    const bool car = agent.kind == sim::AgentKind::kCar;
     const MeshId mesh = !car ? uav_mesh_ : agent.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;
     items_.push_back({mesh, BodyPose(agent.body), instance});
     const uint32_t object_class = car ? proto::OBJECT_CLASS_CAR : proto::OBJECT_CLASS_UAV;

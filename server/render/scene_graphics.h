@@ -51,7 +51,7 @@ class SceneGraphics {
   std::vector<Mesh> meshes_;
   std::vector<DrawItem> items_;
   std::size_t static_item_count_ = 0;
-  MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0;
+  MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0, pedestrian_mesh_ = 0;
   std::vector<LabelledObject> static_labelled_;
   std::vector<LabelledObject> labelled_;
   std::vector<MovingObject> moving_;

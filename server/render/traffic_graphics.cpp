@@ -18,8 +18,6 @@ Eigen::Matrix4f GroundPose(const Eigen::Vector2d& position, double heading, doub
                     Heading(heading));
 }
 
-// A walker's box: shoulders, depth, height; its centre half its height up.
-const Eigen::Vector3d kWalkerHalfExtents(0.25, 0.3, kPedestrianHeight / 2.0);
 
 }  // namespace
 
@@ -83,7 +81,7 @@ void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time
     const traffic::Walker& walker = state.walkers[i];
     // The walker's mesh stands on its origin; its box is centred half its height up.
     add(walker_meshes_[i % kWalkerLooks], first_walker_ + static_cast<InstanceId>(i), proto::OBJECT_CLASS_PEDESTRIAN,
-        walker.position, walker.heading, 0.0, kWalkerHalfExtents.z(), kWalkerHalfExtents, walker.linear_velocity, 0.0);
+        walker.position, walker.heading, 0.0, kPedestrianBox.z(), kPedestrianBox, walker.linear_velocity, 0.0);
   }
 }
 

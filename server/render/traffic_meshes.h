@@ -14,6 +14,9 @@ namespace sim4cv::render {
 
 // How tall a walker is, m.
 inline constexpr float kPedestrianHeight = 1.75f;
+// Half extents of the 3D box a walker's ground truth gives: front to back, shoulder to
+// shoulder, head to toe.
+inline const Eigen::Vector3d kPedestrianBox(0.25, 0.3, kPedestrianHeight / 2.0);
 // The traffic light's housing: its top, m above the pole's foot.
 inline constexpr float kTrafficLightHeight = 3.1f;
 

@@ -49,17 +49,19 @@ struct UavOrder {
 };
 
 // Values of the protocol's EntityKind (sim4cv.proto).
-enum class AgentKind : uint8_t { kCar = 1, kUav = 2 };
+enum class AgentKind : uint8_t { kCar = 1, kUav = 2, kPedestrian = 3 };
 
-// One simulated vehicle: the scene's target car and camera UAV, and any a
-// client spawned. Its id is also its instance id in masks and boxes.
+// One simulated vehicle or person: the scene's target car and camera UAV,
+// and any a client spawned. Its id is also its instance id in masks and boxes.
+// Pedestrians are kinematic: they walk their route at cruise_speed.
 struct Agent {
   uint32_t id = 0;
   AgentKind kind = AgentKind::kCar;
   std::string name;
   BodyState body;
   CarCommand car_command;    // cars
-  float cruise_speed = 0.0f; // cars: the waypoint follower's set speed; 0 with no route
+  float cruise_speed = 0.0f; // cars and pedestrians: the set speed along the route; 0 with no route
+  double walked = 0.0;       // pedestrians: metres along their route
   UavOrder uav_order;        // UAVs
 };
 

@@ -34,7 +34,27 @@ void Follow(const BodyState* logged, BodyState& body) {
   }
 }
 
-const char* KindName(AgentKind kind) { return kind == AgentKind::kCar ? "car" : "UAV"; }
+const char* KindName(AgentKind kind) {
+  switch (kind) {
+    case AgentKind::kCar: return "car";
+    case AgentKind::kUav: return "UAV";
+    case AgentKind::kPedestrian: return "pedestrian";
+  }
+  return "?";
+}
+
+// A pedestrian's pose and velocity `walked` metres along its route.
+void PlaceWalker(const vehicles::Polyline& route, double walked, double speed, BodyState& body) {
+  const double step = 0.05;  // m: the heading from a short chord, defined at any point
+  const Eigen::Vector2d here = route.PointAt(walked);
+  Eigen::Vector2d ahead = route.PointAt(walked + step) - here;
+  if (ahead.squaredNorm() < 1e-12) ahead = here - route.PointAt(walked - step);
+  const double heading = std::atan2(ahead.y(), ahead.x());
+  body.position = {here.x(), here.y(), 0.0};
+  body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()));
+  body.linear_velocity = Eigen::Vector3d(std::cos(heading), std::sin(heading), 0.0) * speed;
+  body.angular_velocity.setZero();
+}
 
 }  // namespace
 
@@ -53,6 +73,7 @@ struct World::Vehicle {
   std::unique_ptr<vehicles::Car> car;
   std::unique_ptr<vehicles::CarDriver> driver;  // null: no route, the car waits for Controls
   std::unique_ptr<vehicles::Quadcopter> uav;
+  std::unique_ptr<vehicles::Polyline> walk;  // a pedestrian's route; null: it stands
 };
 
 struct World::Bodies {
@@ -147,7 +168,10 @@ uint32_t World::Spawn(State& state, AgentKind kind, const std::string& name, con
     ++id;
   }
   SIM4CV_THROW_UNLESS(id <= kMaxAgentId, "the world already holds " << kMaxAgentId << " agents, the most it can");
-  const std::string agent_name = name.empty() ? (kind == AgentKind::kCar ? "car_" : "uav_") + std::to_string(id) : name;
+  const std::string agent_name =
+      name.empty() ? std::string(kind == AgentKind::kCar ? "car_" : kind == AgentKind::kUav ? "uav_" : "pedestrian_") +
+                         std::to_string(id)
+                   : name;
   SIM4CV_THROW_UNLESS(!state.FindByName(agent_name), "an entity named '" << agent_name << "' already exists");
 
   auto& b = *bodies_;
@@ -161,6 +185,10 @@ uint32_t World::Spawn(State& state, AgentKind kind, const std::string& name, con
     vehicle.car = std::make_unique<vehicles::Car>(b.world, scene_.car.params, pose.position.head<2>(), pose.yaw);
     CopyState(vehicle.car->State(), agent.body);
     agent.car_command = {0.0f, 0.0f, 1.0f, true};  // parked until told otherwise
+  } else if (kind == AgentKind::kPedestrian) {
+    // Kinematic: no Bullet body, it stands on the ground where it is put.
+    agent.body.position = {pose.position.x(), pose.position.y(), 0.0};
+    agent.body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()));
   } else {
     vehicle.uav = std::make_unique<vehicles::Quadcopter>(b.world, scene_.uav.params, pose.position, pose.yaw);
     CopyState(vehicle.uav->State(), agent.body);
@@ -205,6 +233,8 @@ void World::Remove(State& state, uint32_t id) {
 }
 
 void World::SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed) {
+  const Agent* found = state.Find(id);
+  if (found && found->kind == AgentKind::kPedestrian) return SetWalk(state, id, std::move(path), closed, speed);
   Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetRoute");
   SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40,
                       "route speed " << speed << " m/s is outside [0, 40]");
@@ -216,7 +246,29 @@ void World::SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> pat
   agent.car_command.manual = false;
 }
 
+void World::SetWalk(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed) {
+  Vehicle& vehicle = VehicleOf(state, id, AgentKind::kPedestrian, "SetRoute");
+  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 10,
+                      "walking speed " << speed << " m/s is outside [0, 10]");
+  SIM4CV_THROW_UNLESS(path.size() >= (closed ? 3u : 2u),
+                      "a walking route needs at least " << (closed ? 3 : 2) << " points; got " << path.size());
+  vehicle.walk = std::make_unique<vehicles::Polyline>(std::move(path), closed);
+  Agent& agent = *state.Find(id);
+  agent.cruise_speed = speed;
+  agent.walked = 0.0;  // from the route's start, where it is put at once
+  PlaceWalker(*vehicle.walk, agent.walked, speed, agent.body);
+}
+
 void World::SetCruiseSpeed(State& state, uint32_t id, float speed) {
+  const Agent* found = state.Find(id);
+  if (found && found->kind == AgentKind::kPedestrian) {
+    Vehicle& walker = VehicleOf(state, id, AgentKind::kPedestrian, "SetSpeed");
+    SIM4CV_THROW_UNLESS(walker.walk, "pedestrian " << id << " has no route to walk at " << speed << " m/s");
+    SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 10,
+                        "walking speed " << speed << " m/s is outside [0, 10]");
+    state.Find(id)->cruise_speed = speed;
+    return;
+  }
   Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetSpeed");
   SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40, "speed " << speed << " m/s is outside [0, 40]");
   SIM4CV_THROW_UNLESS(vehicle.driver, "car " << id << " has no route to drive at " << speed
@@ -269,9 +321,13 @@ void World::StepPhysics(State& state, double dt) {
       Follow(replay_->Find(state.frame_id + 1, agent.id), agent.body);
       if (vehicle.car) {
         vehicle.car->Reset(agent.body.position.head<2>(), agent.body.Yaw());
-      } else {
+      } else if (vehicle.uav) {
         vehicle.uav->Reset(agent.body.position, agent.body.Yaw());
       }
+      continue;
+    }
+    if (agent.kind == AgentKind::kPedestrian) {
+      StepWalker(vehicle, agent, dt);
       continue;
     }
     if (vehicle.car) {
@@ -297,9 +353,24 @@ void World::StepPhysics(State& state, double dt) {
   b.world.stepSimulation(dt, 0);
   for (std::size_t i = 0; i < state.agents.size(); ++i) {
     const Vehicle& vehicle = b.vehicles[i];
-    if (Replayed(vehicle.id)) continue;  // State already holds its logged body
+    if (Replayed(vehicle.id) || state.agents[i].kind == AgentKind::kPedestrian) continue;  // State holds its body
     CopyState(vehicle.car ? vehicle.car->State() : vehicle.uav->State(), state.agents[i].body);
   }
+}
+
+void World::StepWalker(const Vehicle& vehicle, Agent& walker, double dt) {
+  if (!vehicle.walk) return;
+  const vehicles::Polyline& route = *vehicle.walk;
+  const double end = route.length();
+  double speed = walker.cruise_speed;
+  walker.walked += speed * dt;
+  if (route.closed()) {
+    walker.walked = std::fmod(walker.walked, end);
+  } else if (walker.walked >= end) {
+    walker.walked = end;  // arrived: it stands at the end
+    speed = 0.0;
+  }
+  PlaceWalker(route, walker.walked, speed, walker.body);
 }
 
 void World::StepTraffic(State& state, double dt) {

@@ -54,15 +54,19 @@ class World {
   // std::invalid_argument naming the offending value and changes nothing then.
   //
   // A new car at rest, its brake on until it gets Controls or a route; a new
-  // UAV hovering. `name` must be unique (empty: "car_<id>" / "uav_<id>").
+  // UAV hovering; a new pedestrian standing (kinematic: no Bullet body)
+  // until SetRoute gives it a path to walk. `name` must be unique (empty:
+  // "car_<id>" / "uav_<id>" / "pedestrian_<id>").
   // Returns the new agent's id: the lowest free one.
   uint32_t Spawn(State& state, AgentKind kind, const std::string& name, const SpawnPose& pose);
   // Removes an agent; UAVs that followed it hold their position instead.
   void Remove(State& state, uint32_t id);
   // The car's waypoint follower drives `path` (a closed loop or an open
   // path, where it stops at the end) at `speed` m/s; speed 0 stops it there.
+  // A pedestrian is put at the path's start and walks it at `speed` (at
+  // most 10 m/s), looping if closed, else standing at its end.
   void SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed);
-  // Only the set speed of a car that already has a route.
+  // Only the set speed of a car or pedestrian that already has a route.
   void SetCruiseSpeed(State& state, uint32_t id, float speed);
   // What a UAV's controller holds from now on.
   void SetUavOrder(State& state, uint32_t id, const UavOrder& order);
@@ -88,6 +92,8 @@ class World {
 
   Vehicle& VehicleOf(const State& state, uint32_t id, AgentKind kind, const char* what);
   void StepPhysics(State& state, double dt);
+  void StepWalker(const Vehicle& vehicle, Agent& walker, double dt);
+  void SetWalk(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed);
   void StepTraffic(State& state, double dt);
   // Slows a car's waypoint follower for traffic standing or moving ahead on
   // its path, so it neither drives through a car nor runs down a walker.

@@ -202,3 +202,34 @@ TEST_F(EntitiesTest, ControlsForAnIdThatIsNotACarNameItAndTheWorld) {
 
 }  // namespace
 }  // namespace sim4cv::testing
+
+namespace sim4cv::testing {
+namespace {
+
+// A spawned pedestrian walks its waypoints on the pavement beside the road
+// and shows up in the camera UAV's boxes, labelled as a pedestrian.
+TEST_F(EntitiesTest, ASpawnedPedestrianWalksItsWaypointsAndIsLabelled) {
+  const uint32_t walker = client_->Spawn(proto::ENTITY_KIND_PEDESTRIAN, "", -25, -47, 0);
+  EXPECT_EQ(FindEntity(client_->GetWorld(), "pedestrian_3")->kind(), proto::ENTITY_KIND_PEDESTRIAN);
+  client_->SetWaypoints(walker, {{-25, -47}, {40, -47}}, false, 1.5f);
+  bool seen = false;
+  proto::EntityState state;
+  for (int frame = 0; frame < 90; ++frame) {
+    const proto::Frame& f = StepFrames(*client_, 1);
+    for (const proto::Box& box : f.boxes()) {
+      if (box.object_id() == walker) {
+        EXPECT_EQ(box.object_class(), proto::OBJECT_CLASS_PEDESTRIAN);
+        seen = true;
+      }
+    }
+    state = *FindEntity(f.state(), walker);
+  }
+  EXPECT_TRUE(seen) << "the UAV camera, filming the car as it passes, never saw the pedestrian";
+  // 90 frames at 30 Hz: 3 s at 1.5 m/s.
+  EXPECT_NEAR(state.position().x(), -25 + 4.5, 0.1);
+  EXPECT_NEAR(state.position().y(), -47, 1e-6);
+  EXPECT_NEAR(state.linear_velocity().x(), 1.5, 1e-6);
+}
+
+}  // namespace
+}  // namespace sim4cv::testing

@@ -197,3 +197,28 @@ TEST_F(WorldAgentsTest, ReplayingOnlyTheTargetLetsTheUavFlyByPhysics) {
 
 }  // namespace
 }  // namespace sim4cv::sim
+
+namespace sim4cv::sim {
+namespace {
+
+TEST_F(WorldAgentsTest, APedestrianWalksItsRouteAndStandsAtItsEnd) {
+  const uint32_t walker = world_.Spawn(state_, AgentKind::kPedestrian, "", {{0, -20, 5}, 0});
+  EXPECT_EQ(state_.Find(walker)->name, "pedestrian_3");
+  EXPECT_EQ(state_.Find(walker)->body.position, Eigen::Vector3d(0, -20, 0)) << "on the ground, whatever z was";
+  Simulate(world_, state_, 1.0);
+  EXPECT_EQ(state_.Find(walker)->body.position, Eigen::Vector3d(0, -20, 0)) << "it stands until it has a route";
+  world_.SetRoute(state_, walker, {{0, -20}, {10, -20}, {10, -10}}, false, 1.25f);
+  Simulate(world_, state_, 4.0);
+  const BodyState& body = state_.Find(walker)->body;
+  EXPECT_NEAR(body.position.x(), 5.0, 0.02) << "4 s at 1.25 m/s along the first leg";
+  EXPECT_NEAR(body.Yaw(), 0.0, 1e-6);
+  EXPECT_NEAR(body.linear_velocity.x(), 1.25, 1e-9);
+  Simulate(world_, state_, 20.0);
+  EXPECT_LT((state_.Find(walker)->body.position - Eigen::Vector3d(10, -10, 0)).norm(), 1e-6) << "and stands at its end";
+  EXPECT_TRUE(state_.Find(walker)->body.linear_velocity.isZero());
+  EXPECT_NE(ErrorOf([&] { world_.SetRoute(state_, walker, {{0, 0}, {1, 0}}, false, 12.0f); }).find("walking speed 12"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace sim4cv::sim

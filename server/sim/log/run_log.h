@@ -31,8 +31,10 @@ inline constexpr uint32_t kMaxRecordBytes = 64u << 20;
 // repeated here so the library needs no protobuf; a test checks they agree.
 inline constexpr uint16_t kEntityKindCar = 1;
 inline constexpr uint16_t kEntityKindUav = 2;
+inline constexpr uint16_t kEntityKindPedestrian = 3;
 inline constexpr uint16_t kObjectClassCar = 1;
 inline constexpr uint16_t kObjectClassUav = 2;
+inline constexpr uint16_t kObjectClassPedestrian = 7;
 
 // A tracker box whose camera the daemon did not know.
 inline constexpr uint16_t kNoCamera = 0xFFFF;
