@@ -5,6 +5,7 @@
 //      three UAVs spawned, all following the car;
 //   3. frames rendered per second (RGB + depth + mask read back, boxes) from the UAV camera.
 //   sim4cv_bench_sim_render [--map FILE] [--width W] [--height H] [--steps N] [--frames N]
+//                           [--traffic-cars N] [--traffic-parked N] [--traffic-pedestrians N] [--traffic-lights on|off]
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -50,16 +51,22 @@ int main(int argc, char** argv) {
   uint32_t width = 320, height = 180;
   int steps = 24000, frames = 2000;
   std::string map_file;
+  traffic::TrafficConfig traffic;  // none unless asked for (lights only on urban maps, as in the daemon)
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--map") map_file = argv[i + 1];
+    if (flag == "--traffic-cars") traffic.moving_cars = std::stoi(argv[i + 1]);
+    if (flag == "--traffic-parked") traffic.parked_cars = std::stoi(argv[i + 1]);
+    if (flag == "--traffic-pedestrians") traffic.pedestrians = std::stoi(argv[i + 1]);
+    if (flag == "--traffic-lights") traffic.traffic_lights = std::string(argv[i + 1]) == "on";
     if (flag == "--width") width = static_cast<uint32_t>(std::stoi(argv[i + 1]));
     if (flag == "--height") height = static_cast<uint32_t>(std::stoi(argv[i + 1]));
     if (flag == "--steps") steps = std::stoi(argv[i + 1]);
     if (flag == "--frames") frames = std::stoi(argv[i + 1]);
   }
-  const sim::Scene scene =
+  sim::Scene scene =
       map_file.empty() ? sim::DefaultScene(width, height) : sim::SceneFromMap(map_file, "", 6.0f, width, height);
+  sim::AddTraffic(scene, traffic);
   sim::World world(scene);
   sim::State state = world.InitialState();
 

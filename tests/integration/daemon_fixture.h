@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -12,6 +13,11 @@
 #include "tests/support/daemon_process.h"
 
 namespace sim4cv::testing {
+
+// Where the repository's files are (e.g. scenes/), from this header's own path.
+inline std::string SourcePath(const std::string& relative) {
+  return (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / relative).string();
+}
 
 inline const std::vector<proto::Channel> kAllChannels = {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK,
                                                         proto::CHANNEL_BOXES};

@@ -8,7 +8,7 @@
 namespace sim4cv::testing {
 namespace {
 
-std::string MapPath(const std::string& relative) { return std::string(SIM4CV_SOURCE_DIR) + "/scenes/" + relative; }
+std::string MapPath(const std::string& relative) { return SourcePath("scenes/" + relative); }
 
 // Mean of the RGB channel over the whole image.
 double MeanRgb(const proto::Frame& frame, int component) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "server/sim/log/run_log_reader.h"
+#include "tests/integration/daemon_fixture.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::testing {
@@ -79,11 +80,6 @@ inline void ExpectSamePoses(const proto::State& state, const runlog::FrameLogRec
     EXPECT_EQ(logged.id, state.entities(i).id()) << "frame " << record.frame_id;
     EXPECT_EQ(PoseOf(logged.body), PoseOf(state.entities(i))) << "frame " << record.frame_id << ", entity " << logged.id;
   }
-}
-
-// Where the repository's files are (scenes/), from this header's own path.
-inline std::string SourcePath(const std::string& relative) {
-  return (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / relative).string();
 }
 
 }  // namespace sim4cv::testing
