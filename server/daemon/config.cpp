@@ -57,6 +57,9 @@ Usage: sim4cvd [flags]
   --traffic-pedestrians N   pedestrians walking across a map's crosswalks (default 0)
   --traffic-lights on|off   traffic lights at the junctions of urban maps (default on; desert maps
                             never have them)
+  --traffic-green S         seconds of green per junction axis (default 8)
+  --traffic-yellow S        seconds of yellow after green (default 2)
+  --traffic-all-red S       seconds both axes are red between (default 1)
   --traffic-seed N          the seed of the traffic's layout and choices (default: --seed)
   --seed N                  seed for every random choice of the simulation (default 1)
   --bind ADDRESS            address the TCP port listens on (default 127.0.0.1; 0.0.0.0 for all)
@@ -114,6 +117,9 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
          SIM4CV_THROW_UNLESS(v == "on" || v == "off", f << " is '" << v << "'; use on or off");
          config.traffic.traffic_lights = v == "on";
        }},
+      {"--traffic-green", [&](auto& f, auto& v) { config.traffic.green_s = ParseNumber<double>(f, v, 0.1, 600); }},
+      {"--traffic-yellow", [&](auto& f, auto& v) { config.traffic.yellow_s = ParseNumber<double>(f, v, 0, 60); }},
+      {"--traffic-all-red", [&](auto& f, auto& v) { config.traffic.all_red_s = ParseNumber<double>(f, v, 0, 60); }},
       {"--traffic-seed",
        [&](auto& f, auto& v) {
          config.traffic.seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX);

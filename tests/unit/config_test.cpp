@@ -118,6 +118,26 @@ TEST(ConfigTest, RunLogFlags) {
   ExpectMentions(ParseError({"--replay", "a.s4log", "--replay-only", "0"}), {"--replay-only is 0"});
 }
 
+TEST(ConfigTest, TrafficFlags) {
+  const Config defaults = Parse({"--seed", "9"});
+  EXPECT_EQ(defaults.traffic.moving_cars, 0);
+  EXPECT_TRUE(defaults.traffic.traffic_lights);
+  EXPECT_EQ(defaults.traffic.seed, 9u) << "the traffic seed follows --seed unless given";
+  const Config config =
+      Parse({"--traffic-cars", "12", "--traffic-parked", "30", "--traffic-pedestrians", "8", "--traffic-lights", "off",
+             "--traffic-seed", "5", "--traffic-green", "6.5", "--traffic-yellow", "1", "--traffic-all-red", "0"});
+  EXPECT_EQ(config.traffic.moving_cars, 12);
+  EXPECT_EQ(config.traffic.parked_cars, 30);
+  EXPECT_EQ(config.traffic.pedestrians, 8);
+  EXPECT_FALSE(config.traffic.traffic_lights);
+  EXPECT_EQ(config.traffic.seed, 5u);
+  EXPECT_EQ(config.traffic.green_s, 6.5);
+  EXPECT_EQ(config.traffic.yellow_s, 1.0);
+  EXPECT_EQ(config.traffic.all_red_s, 0.0);
+  ExpectMentions(ParseError({"--traffic-lights", "maybe"}), {"--traffic-lights", "'maybe'", "on or off"});
+  ExpectMentions(ParseError({"--traffic-cars", "-3"}), {"--traffic-cars", "-3"});
+}
+
 TEST(ConfigTest, MapsDirForLoadMap) {
   EXPECT_NE(Parse({}).maps_dir.find("scenes"), std::string::npos);
   EXPECT_EQ(Parse({"--maps-dir", "/srv/maps"}).maps_dir, "/srv/maps");
@@ -131,7 +151,8 @@ TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
     ExpectMentions(help, {"--scene", "--seed", "--bind", "--tcp-port", "--physics-hz", "--frame-hz", "--width",
                           "--height", "--mode", "--max-message-bytes", "--max-clients", "--tcp-send-buffer", "--udp-port", "--udp-datagram-bytes",
                           "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--log-level", "--log ", "--log-label",
-                          "--replay", "--replay-only", "--maps-dir", "--help",
+                          "--replay", "--replay-only", "--maps-dir", "--traffic-cars", "--traffic-parked",
+                          "--traffic-pedestrians", "--traffic-lights", "--traffic-green", "--traffic-seed", "--help",
                           "lockstep", "realtime"});
     EXPECT_EQ(help, HelpText());
   }
