@@ -127,3 +127,18 @@ def test_configure_errors_name_the_problem(connect):
     refused(lambda: client.set_route(CAR_ID, "loop", 5), pb.ERROR_CODE_INVALID_ARGUMENT, "'loop'", "routes: none")
     world = client.get_world()
     assert world.scene_name == "default" and len(world.entities) == 2, "nothing changed"
+
+
+def test_spawned_pedestrian_walks_its_waypoints(connect):
+    client = connect("pedestrian")
+    client.subscribe("uav", ["boxes"], "lockstep", with_state=True)
+    walker = client.spawn("pedestrian", "", -25, -47, 0)
+    world = client.get_world()
+    assert [e.kind for e in world.entities if e.id == walker] == [sim4cv.ENTITY_KIND_PEDESTRIAN]
+    client.set_waypoints(walker, [(-25, -47), (40, -47)], False, 2.0)
+    for _ in range(60):  # 2 s at 30 Hz
+        frame = client.step_and_receive(timeout=TIMEOUT_S)
+    body = entity(frame.state, walker)
+    assert body.position.x == pytest.approx(-25 + 4.0, abs=0.1)
+    assert body.position.y == pytest.approx(-47, abs=1e-6)
+    assert body.position.z == 0

@@ -30,9 +30,10 @@ class WorldRequests:
         return self._configure_world(load_map=pb.LoadMap(text=text, route=route, car_speed=car_speed))
 
     def spawn(self, kind, name, x, y, z, yaw_deg=0.0, snap_to_lane=False):
-        """Adds a car (at rest, brake on; z ignored) or a UAV (hovering; z
-        above the ground, > 0.5 m). kind: "car", "uav" or an ENTITY_KIND_*
-        value; name "": "car_<id>" / "uav_<id>". Returns the new entity id."""
+        """Adds a car (at rest, brake on; z ignored), a UAV (hovering; z
+        above the ground, >= 0.5 m) or a pedestrian (standing; z ignored).
+        kind: "car", "uav", "pedestrian" or an ENTITY_KIND_* value; name "":
+        "car_<id>" / "uav_<id>" / "pedestrian_<id>". Returns the new id."""
         spawn = pb.Spawn(kind=_kind_value(kind), name=name, position=pb.Vec3(x=x, y=y, z=z),
                          yaw_deg=yaw_deg, snap_to_lane=snap_to_lane)
         return self.configure(pb.Configure(spawn=spawn)).entity_id
@@ -46,8 +47,8 @@ class WorldRequests:
         return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, route_name=route_name, speed=speed))
 
     def set_waypoints(self, entity_id, points, closed, speed):
-        """A car drives through lane-centre points [(x, y), ...]: round and
-        round if `closed`, else it stops at the last one."""
+        """A car drives (a pedestrian walks) through points [(x, y), ...]:
+        round and round if `closed`, else it stops at the last one."""
         waypoints = pb.Waypoints(points=[pb.Vec2(x=x, y=y) for x, y in points], closed=closed)
         return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, waypoints=waypoints, speed=speed))
 
