@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "server/render/mesh_builder.h"
+
 namespace sim4cv::render::mapmesh {
 namespace {
 
@@ -62,6 +64,13 @@ void AddFlatQuad(Mesh& mesh, const std::array<Eigen::Vector3f, 4>& corners, cons
   for (int i = 1; i < 4; ++i) AddVertex(mesh, corners[i], normal, color);
   AddTriangle(mesh, first, first + 1, first + 2);
   AddTriangle(mesh, first, first + 2, first + 3);
+}
+
+void AddBox(Mesh& mesh, const Eigen::Vector3f& centre, const Eigen::Vector3f& half_extents,
+            const Eigen::Vector3f& color) {
+  Eigen::Matrix4f at = Eigen::Matrix4f::Identity();
+  at.block<3, 1>(0, 3) = centre;
+  AppendMesh(mesh, MakeBox(half_extents, color), at);
 }
 
 }  // namespace sim4cv::render::mapmesh

@@ -33,6 +33,20 @@ void AddTriangle(Mesh& mesh, uint32_t a, uint32_t b, uint32_t c);
 void AddFlatTriangle(Mesh& mesh, const std::array<Eigen::Vector3f, 3>& corners, const Eigen::Vector3f& color);
 void AddFlatQuad(Mesh& mesh, const std::array<Eigen::Vector3f, 4>& corners, const Eigen::Vector3f& color);
 
+// A box of `half_extents` centred on `centre` (axis-aligned in the mesh's
+// frame), appended to `mesh`.
+void AddBox(Mesh& mesh, const Eigen::Vector3f& centre, const Eigen::Vector3f& half_extents,
+            const Eigen::Vector3f& color);
+
+// One entry of a palette, the same one for the same (variant, stream, salt):
+// `stream` keeps one family of models' choices apart from another's, `salt`
+// one choice of a model (roof, walls, ...) apart from the next.
+template <std::size_t N>
+const Eigen::Vector3f& Pick(const std::array<Eigen::Vector3f, N>& palette, uint32_t variant, int64_t stream,
+                            uint32_t salt) {
+  return palette[static_cast<std::size_t>(Hash01(variant, stream, salt) * N) % N];
+}
+
 // Number of triangles in a mesh.
 inline std::size_t TriangleCount(const Mesh& mesh) { return mesh.indices.size() / 3; }
 

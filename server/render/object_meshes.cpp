@@ -14,16 +14,12 @@ namespace {
 using Eigen::Vector3f;
 using map::ObjectKind;
 
-void AddBox(Mesh& mesh, const Vector3f& centre, const Vector3f& half_extents, const Vector3f& color) {
-  Eigen::Matrix4f at = Eigen::Matrix4f::Identity();
-  at.block<3, 1>(0, 3) = centre;
-  AppendMesh(mesh, MakeBox(half_extents, color), at);
-}
+using mapmesh::AddBox;
 
 // Picks one entry of a palette, the same one for the same variant.
 template <std::size_t N>
 const Vector3f& Pick(const std::array<Vector3f, N>& palette, uint32_t variant, uint32_t salt) {
-  return palette[static_cast<std::size_t>(mapmesh::Hash01(variant, 0, salt) * N) % N];
+  return mapmesh::Pick(palette, variant, 0, salt);
 }
 
 // A box of walls with two dark ribbon-window bands and a gabled roof along

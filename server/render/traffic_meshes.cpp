@@ -11,17 +11,13 @@ namespace {
 using Eigen::Vector3f;
 using traffic::Signal;
 
-void AddBox(Mesh& mesh, const Vector3f& centre, const Vector3f& half_extents, const Vector3f& color) {
-  Eigen::Matrix4f at = Eigen::Matrix4f::Identity();
-  at.block<3, 1>(0, 3) = centre;
-  AppendMesh(mesh, MakeBox(half_extents, color), at);
-}
+using mapmesh::AddBox;
 
 // The same entry for the same variant; `salt` keeps the choices of one
 // walker (shirt, trousers, ...) independent of each other.
 template <std::size_t N>
 const Vector3f& Pick(const std::array<Vector3f, N>& palette, uint32_t variant, uint32_t salt) {
-  return palette[static_cast<std::size_t>(mapmesh::Hash01(variant, 1, salt) * N) % N];
+  return mapmesh::Pick(palette, variant, 1, salt);
 }
 
 // The housing's front face (x) and its lamps' heights.

@@ -19,6 +19,7 @@
 #include "protocol/framing.h"
 #include "server/session/server_context.h"
 #include "server/sim/scene.h"
+#include "server/transport/transport.h"
 
 namespace sim4cv::test {
 
@@ -182,6 +183,89 @@ inline std::unique_ptr<SimThreadStandIn> OfferRepliesThenFrames(SimStandIn& sim,
       while (replies_seen + ahead < i && !stop) std::this_thread::sleep_for(50us);
     }
   });
+}
+
+// A socket transport on loopback, started on a stand-in sim thread's
+// context, with one client subscribed (newest frames of "uav").
+template <typename SocketClient>
+class SocketReplyTest : public ::testing::Test {
+ protected:
+  virtual std::unique_ptr<transport::Transport> MakeTransport() = 0;
+
+  void SetUp() override {
+    transport_ = MakeTransport();
+    transport_->Start(sim_.context());
+    subscriber_ = Connect(client_);
+  }
+  void TearDown() override { transport_->Stop(); }
+
+  // Connects (or registers) and subscribes `client`; its link as the sim thread gets it.
+  Subscriber Connect(SocketClient& client) {
+    client.Connect("127.0.0.1", static_cast<uint16_t>(std::stoi(transport_->info().address())), "reply-test");
+    client.Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_NEWEST);
+    return sim_.WaitForSubscriber();
+  }
+
+  // A frame reaches the client under the camera name it was rendered with.
+  void ExpectFramesCarryTheirCameraName() {
+    subscriber_.link->OfferFrame(sim_.MakeFrame(1, "uav-renamed"));
+    proto::Frame frame;
+    ASSERT_TRUE(client_.ReceiveFrame(frame, 5000ms));
+    EXPECT_EQ(frame.camera(), "uav-renamed") << "the name comes from the frame, not from the scene";
+  }
+
+  // A reply, a fatal Error, then a reply and a frame: the first two arrive,
+  // in order, and nothing after the fatal Error does; the sim thread hears
+  // the client is gone. What the transport does next is its own test's.
+  void ExpectFatalErrorEndsTheClient() {
+    session::ClientLink& link = *subscriber_.link;
+    link.OfferReply(MarkedReply(1));
+    link.OfferReply(FatalError("the map could not be loaded"));
+    link.OfferReply(MarkedReply(2));     // after the fatal Error: never sent
+    link.OfferFrame(sim_.MakeFrame(1));  // nor is this
+    proto::Envelope envelope;
+    ASSERT_TRUE(client_.ReceiveEnvelope(envelope, 5000ms));
+    EXPECT_EQ(envelope.state().frame_id(), 1u);
+    ASSERT_TRUE(client_.ReceiveEnvelope(envelope, 5000ms));
+    ASSERT_TRUE(envelope.has_error()) << envelope.DebugString();
+    EXPECT_TRUE(envelope.error().fatal());
+    EXPECT_EQ(envelope.error().message(), "the map could not be loaded");
+    EXPECT_TRUE(sim_.WaitForDisconnect(subscriber_.client));
+  }
+
+  SimStandIn sim_;  // first: outlives the transport and every frame it holds
+  std::unique_ptr<transport::Transport> transport_;
+  SocketClient client_;
+  Subscriber subscriber_;
+};
+
+// The ordering test every socket transport runs: `rounds` of "reply i, then
+// frame i" from a stand-in sim thread, read by `client` (anything with
+// ReceiveEnvelope). Every reply arrives, in order, and no frame before the
+// reply offered ahead of it.
+template <typename SocketClient>
+void ExpectRepliesInOrderBeforeLaterFrames(SimStandIn& sim, session::ClientLink& link, SocketClient& client,
+                                           uint64_t rounds) {
+  std::atomic<uint64_t> replies_seen{0};
+  const auto sim_thread = OfferRepliesThenFrames(sim, link, rounds, replies_seen);
+  uint64_t frames = 0, last_frame = 0;
+  while (replies_seen < rounds || last_frame < rounds) {
+    proto::Envelope envelope;
+    ASSERT_TRUE(client.ReceiveEnvelope(envelope, 5000ms)) << "after reply " << replies_seen << ", frame " << last_frame;
+    if (envelope.has_state()) {
+      ASSERT_EQ(envelope.state().frame_id(), replies_seen + 1) << "a reply was lost or reordered";
+      EXPECT_EQ(envelope.sequence(), 0u) << "the daemon never sets Envelope.sequence";
+      ++replies_seen;
+      continue;
+    }
+    ASSERT_TRUE(envelope.has_frame()) << envelope.DebugString();
+    ASSERT_LE(envelope.frame().frame_id(), replies_seen.load())
+        << "frame " << envelope.frame().frame_id() << " overtook the reply offered before it";
+    EXPECT_EQ(envelope.frame().camera(), "uav");
+    last_frame = envelope.frame().frame_id();
+    ++frames;
+  }
+  EXPECT_GT(frames, 0u);
 }
 
 }  // namespace sim4cv::test

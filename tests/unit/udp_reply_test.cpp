@@ -17,75 +17,24 @@ namespace {
 
 constexpr uint32_t kExpiryMs = 400;
 
-class UdpReplyTest : public ::testing::Test {
+class UdpReplyTest : public SocketReplyTest<UdpClient> {
  protected:
-  void SetUp() override {
+  std::unique_ptr<transport::Transport> MakeTransport() override {
     transport::UdpOptions options;
     options.expiry_ms = kExpiryMs;
-    transport_ = transport::MakeUdpTransport(options);
-    transport_->Start(sim_.context());
-    subscriber_ = Connect(client_);
+    return transport::MakeUdpTransport(options);
   }
-  void TearDown() override { transport_->Stop(); }
-
-  // Registers and subscribes `client` (newest frames of "uav"); its link as the sim thread gets it.
-  Subscriber Connect(UdpClient& client) {
-    client.Connect("127.0.0.1", static_cast<uint16_t>(std::stoi(transport_->info().address())), "reply-test");
-    client.Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_NEWEST);
-    return sim_.WaitForSubscriber();
-  }
-
-  SimStandIn sim_;  // first: outlives the transport and every frame it holds
-  std::unique_ptr<transport::Transport> transport_;
-  UdpClient client_;
-  Subscriber subscriber_;
 };
 
 TEST_F(UdpReplyTest, RepliesFromTheSimThreadArriveInOrderAndBeforeLaterFrames) {
-  constexpr uint64_t kRounds = 3000;
-  std::atomic<uint64_t> replies_seen{0};
-  const auto sim = OfferRepliesThenFrames(sim_, *subscriber_.link, kRounds, replies_seen);
-  uint64_t frames = 0, last_frame = 0;
-  while (replies_seen < kRounds || last_frame < kRounds) {
-    proto::Envelope envelope;
-    ASSERT_TRUE(client_.ReceiveEnvelope(envelope, 5000ms)) << "after reply " << replies_seen << ", frame " << last_frame;
-    if (envelope.has_state()) {
-      ASSERT_EQ(envelope.state().frame_id(), replies_seen + 1) << "a reply was lost or reordered";
-      EXPECT_EQ(envelope.sequence(), 0u) << "the daemon never sets Envelope.sequence";
-      ++replies_seen;
-      continue;
-    }
-    ASSERT_TRUE(envelope.has_frame()) << envelope.DebugString();
-    ASSERT_LE(envelope.frame().frame_id(), replies_seen.load())
-        << "frame " << envelope.frame().frame_id() << " overtook the reply offered before it";
-    EXPECT_EQ(envelope.frame().camera(), "uav");
-    last_frame = envelope.frame().frame_id();
-    ++frames;
-  }
-  EXPECT_GT(frames, 0u);
+  ExpectRepliesInOrderBeforeLaterFrames(sim_, *subscriber_.link, client_, 3000);
 }
 
-TEST_F(UdpReplyTest, FramesCarryTheCameraNameTheyWereRenderedWith) {
-  subscriber_.link->OfferFrame(sim_.MakeFrame(1, "uav-renamed"));
-  proto::Frame frame;
-  ASSERT_TRUE(client_.ReceiveFrame(frame, 5000ms));
-  EXPECT_EQ(frame.camera(), "uav-renamed") << "the name comes from the frame, not from the scene";
-}
+TEST_F(UdpReplyTest, FramesCarryTheCameraNameTheyWereRenderedWith) { ExpectFramesCarryTheirCameraName(); }
 
 TEST_F(UdpReplyTest, FatalErrorFromTheSimThreadIsSentThenThePeerIsUnregistered) {
-  session::ClientLink& link = *subscriber_.link;
-  link.OfferReply(MarkedReply(1));
-  link.OfferReply(FatalError("the map could not be loaded"));
-  link.OfferReply(MarkedReply(2));     // after the fatal Error: never sent
-  link.OfferFrame(sim_.MakeFrame(1));  // nor is this
+  ExpectFatalErrorEndsTheClient();
   proto::Envelope envelope;
-  ASSERT_TRUE(client_.ReceiveEnvelope(envelope, 5000ms));
-  EXPECT_EQ(envelope.state().frame_id(), 1u);
-  ASSERT_TRUE(client_.ReceiveEnvelope(envelope, 5000ms));
-  ASSERT_TRUE(envelope.has_error()) << envelope.DebugString();
-  EXPECT_TRUE(envelope.error().fatal());
-  EXPECT_EQ(envelope.error().message(), "the map could not be loaded");
-  EXPECT_TRUE(sim_.WaitForDisconnect(subscriber_.client));
   EXPECT_FALSE(client_.ReceiveEnvelope(envelope, 200ms)) << envelope.DebugString();
   try {
     client_.GetStats(1000ms);
