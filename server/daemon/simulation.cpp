@@ -117,10 +117,28 @@ void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
   const float speed = load.car_speed() > 0 ? load.car_speed() : config_.car_speed;
   auto scene = Checked([&] {
     sim::Scene built = sim::SceneFromMap(std::move(loaded), load.route(), speed, config_.width, config_.height);
-    sim::AddTraffic(built, config_.traffic);  // the daemon's --traffic-* flags hold for every map
+    try {
+      sim::AddTraffic(built, TrafficFor(load));
+    } catch (const std::invalid_argument& error) {
+      // The plan names the daemon flag; say where this request's numbers came from.
+      throw std::invalid_argument(std::string(load.has_traffic() ? "LoadMap.traffic: " : "the daemon's traffic flags: ") +
+                                  error.what());
+    }
     return std::make_shared<const sim::Scene>(std::move(built));
   });
   Rebuild(std::move(scene), change);
+}
+
+traffic::TrafficConfig Simulation::TrafficFor(const proto::LoadMap& load) const {
+  traffic::TrafficConfig traffic = config_.traffic;  // the daemon's --traffic-* flags, unless the request says
+  if (!load.has_traffic()) return traffic;
+  const proto::TrafficSettings& asked = load.traffic();
+  traffic.moving_cars = static_cast<int>(asked.cars());
+  traffic.parked_cars = static_cast<int>(asked.parked());
+  traffic.pedestrians = static_cast<int>(asked.pedestrians());
+  traffic.traffic_lights = !asked.no_lights();
+  if (asked.seed() != 0) traffic.seed = asked.seed();
+  return traffic;
 }
 
 void Simulation::RefuseWhileLogging(const char* request, const char* why) const {

@@ -47,6 +47,11 @@ std::string CheckLoadMap(const proto::LoadMap& load) {
               "LoadMap.name '" + name + "' must be a shipped map's name relative to the maps folder, e.g. "
                                         "'tracking/hard_urban' (no '..', no leading '/')");
   }
+  if (load.has_traffic()) {
+    check.Range("LoadMap.traffic.cars", load.traffic().cars(), 0, 500)
+        .Range("LoadMap.traffic.parked", load.traffic().parked(), 0, 2000)
+        .Range("LoadMap.traffic.pedestrians", load.traffic().pedestrians(), 0, 2000);
+  }
   check.True(load.text().size() <= (4u << 20), "LoadMap.text is " + std::to_string(load.text().size()) +
                                                    " bytes; a map text may have at most 4 MiB");
   return check.Range("LoadMap.car_speed", load.car_speed(), 0, 40).problem();

@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <set>
 
 #include "tests/support/configure_fixture.h"
 
@@ -59,6 +60,28 @@ TEST_F(MapTest, LoadMapByNameSwitchesTheSceneAndKeepsTheUavSubscription) {
   EXPECT_NEAR(std::hypot(later.entities(0).linear_velocity().x(), later.entities(0).linear_velocity().y()), 8.0, 1.5)
       << "LoadMap.car_speed 8";
   EXPECT_GT(PlaneDistance(later.entities(0).position(), start.entities(0).position()), 5.0);
+}
+
+// A map loaded with traffic settings gets that traffic, whatever the
+// daemon's flags: the chase camera behind the target car sees pedestrians
+// and traffic lights; more than the map holds is refused naming the field.
+TEST_F(MapTest, LoadMapWithTrafficSettings) {
+  client_->Subscribe("car_front", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
+  proto::TrafficSettings traffic;
+  traffic.set_cars(10);
+  traffic.set_parked(20);
+  traffic.set_pedestrians(40);
+  client_->LoadMapByName("driving/train/01_urban", "", 6, traffic);
+  std::set<int> classes;
+  for (int frame = 0; frame < 150; ++frame) {
+    for (const proto::Box& box : StepFrames(*client_, 1).boxes()) classes.insert(box.object_class());
+  }
+  for (const int wanted : {proto::OBJECT_CLASS_CAR, proto::OBJECT_CLASS_PEDESTRIAN, proto::OBJECT_CLASS_TRAFFIC_LIGHT}) {
+    EXPECT_TRUE(classes.count(wanted)) << proto::ObjectClass_Name(wanted) << " never seen";
+  }
+  traffic.set_cars(400);
+  ExpectRefused([&] { client_->LoadMapByName("driving/train/01_urban", "", 6, traffic); },
+                proto::ERROR_CODE_INVALID_ARGUMENT, {"LoadMap.traffic", "400", "138"});
 }
 
 TEST_F(MapTest, LoadMapAsTextAndRefusedMaps) {

@@ -142,3 +142,16 @@ def test_spawned_pedestrian_walks_its_waypoints(connect):
     assert body.position.x == pytest.approx(-25 + 4.0, abs=0.1)
     assert body.position.y == pytest.approx(-47, abs=1e-6)
     assert body.position.z == 0
+
+
+def test_load_map_with_traffic(connect):
+    client = connect("traffic")
+    world = client.load_map_by_name("driving/train/01_urban", traffic={"cars": 5, "parked": 10, "pedestrians": 10})
+    assert world.scene_name == "driving_train_01_urban"
+    client.subscribe("car_front", ["boxes"], "lockstep")
+    classes = set()
+    for _ in range(90):
+        classes.update(box.object_class for box in client.step_and_receive(TIMEOUT_S).boxes)
+    assert pb.OBJECT_CLASS_TRAFFIC_LIGHT in classes, classes
+    refused(lambda: client.load_map_by_name("driving/train/01_urban", traffic={"cars": 999}),
+            pb.ERROR_CODE_INVALID_ARGUMENT, "LoadMap.traffic.cars is 999")

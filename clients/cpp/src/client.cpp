@@ -154,12 +154,14 @@ proto::WorldInfo Client::ConfigureWorld(proto::Configure request) {
   return std::move(*Configure(std::move(request)).mutable_world());
 }
 
-proto::WorldInfo Client::LoadMapByName(const std::string& name, const std::string& route, float car_speed) {
-  return ConfigureWorld(detail::LoadMapByNameRequest(name, route, car_speed));
+proto::WorldInfo Client::LoadMapByName(const std::string& name, const std::string& route, float car_speed,
+                                       const std::optional<proto::TrafficSettings>& traffic) {
+  return ConfigureWorld(detail::LoadMapByNameRequest(name, route, car_speed, traffic));
 }
 
-proto::WorldInfo Client::LoadMapText(const std::string& text, const std::string& route, float car_speed) {
-  return ConfigureWorld(detail::LoadMapTextRequest(text, route, car_speed));
+proto::WorldInfo Client::LoadMapText(const std::string& text, const std::string& route, float car_speed,
+                                     const std::optional<proto::TrafficSettings>& traffic) {
+  return ConfigureWorld(detail::LoadMapTextRequest(text, route, car_speed, traffic));
 }
 
 uint32_t Client::Spawn(proto::EntityKind kind, const std::string& name, double x, double y, double z, double yaw_deg,

@@ -60,19 +60,30 @@ proto::Envelope ControlsRequest(uint32_t entity_id, float steering, float thrott
   return envelope;
 }
 
-proto::Configure LoadMapByNameRequest(const std::string& name, const std::string& route, float car_speed) {
+namespace {
+
+proto::Configure LoadMapRequest(const std::string& route, float car_speed,
+                                const std::optional<proto::TrafficSettings>& traffic) {
   proto::Configure request;
-  request.mutable_load_map()->set_name(name);
   request.mutable_load_map()->set_route(route);
   request.mutable_load_map()->set_car_speed(car_speed);
+  if (traffic) *request.mutable_load_map()->mutable_traffic() = *traffic;
   return request;
 }
 
-proto::Configure LoadMapTextRequest(const std::string& text, const std::string& route, float car_speed) {
-  proto::Configure request;
+}  // namespace
+
+proto::Configure LoadMapByNameRequest(const std::string& name, const std::string& route, float car_speed,
+                                      const std::optional<proto::TrafficSettings>& traffic) {
+  proto::Configure request = LoadMapRequest(route, car_speed, traffic);
+  request.mutable_load_map()->set_name(name);
+  return request;
+}
+
+proto::Configure LoadMapTextRequest(const std::string& text, const std::string& route, float car_speed,
+                                    const std::optional<proto::TrafficSettings>& traffic) {
+  proto::Configure request = LoadMapRequest(route, car_speed, traffic);
   request.mutable_load_map()->set_text(text);
-  request.mutable_load_map()->set_route(route);
-  request.mutable_load_map()->set_car_speed(car_speed);
   return request;
 }
 

@@ -27,8 +27,10 @@ proto::Envelope ControlsRequest(uint32_t entity_id, float steering, float thrott
 
 // Configure requests (docs/protocol.md, "Configuring the world"), without a
 // request_id: the client that sends one assigns it.
-proto::Configure LoadMapByNameRequest(const std::string& name, const std::string& route, float car_speed);
-proto::Configure LoadMapTextRequest(const std::string& text, const std::string& route, float car_speed);
+proto::Configure LoadMapByNameRequest(const std::string& name, const std::string& route, float car_speed,
+                                      const std::optional<proto::TrafficSettings>& traffic);
+proto::Configure LoadMapTextRequest(const std::string& text, const std::string& route, float car_speed,
+                                    const std::optional<proto::TrafficSettings>& traffic);
 proto::Configure SpawnRequest(proto::EntityKind kind, const std::string& name, double x, double y, double z,
                               double yaw_deg, bool snap_to_lane);
 proto::Configure RemoveRequest(uint32_t entity_id);

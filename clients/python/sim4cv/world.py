@@ -12,6 +12,13 @@ def _kind_value(kind):
     return entity_kind_value(kind)
 
 
+def _load_map(route, car_speed, traffic, **source):
+    load = pb.LoadMap(route=route, car_speed=car_speed, **source)
+    if traffic is not None:
+        load.traffic.CopyFrom(pb.TrafficSettings(**traffic))
+    return load
+
+
 class WorldRequests:
     """Mixed into Client; needs its configure(request) -> pb.Configured."""
 
@@ -19,15 +26,17 @@ class WorldRequests:
         """configure(pb.Configure(**request)) -> the WorldInfo after the change."""
         return self.configure(pb.Configure(**request)).world
 
-    def load_map_by_name(self, name, route="", car_speed=0.0):
+    def load_map_by_name(self, name, route="", car_speed=0.0, traffic=None):
         """Replaces the world with a shipped map, e.g. "tracking/hard_urban"
         (route "": its first closed route; car_speed 0: the daemon's
-        --car-speed). Returns the WorldInfo."""
-        return self._configure_world(load_map=pb.LoadMap(name=name, route=route, car_speed=car_speed))
+        --car-speed; traffic None: the daemon's --traffic-* flags, else a
+        dict of TrafficSettings fields, e.g. {"cars": 20, "pedestrians": 30}).
+        Returns the WorldInfo."""
+        return self._configure_world(load_map=_load_map(route, car_speed, traffic, name=name))
 
-    def load_map_text(self, text, route="", car_speed=0.0):
+    def load_map_text(self, text, route="", car_speed=0.0, traffic=None):
         """The same with the text of a map file (docs/maps.md)."""
-        return self._configure_world(load_map=pb.LoadMap(text=text, route=route, car_speed=car_speed))
+        return self._configure_world(load_map=_load_map(route, car_speed, traffic, text=text))
 
     def spawn(self, kind, name, x, y, z, yaw_deg=0.0, snap_to_lane=False):
         """Adds a car (at rest, brake on; z ignored), a UAV (hovering; z

@@ -125,10 +125,13 @@ class Client {
   // the change. Same exceptions as Configure.
   //
   // Replaces the world with a shipped map, e.g. "tracking/hard_urban" (route
-  // "": the map's first closed route; car_speed 0: the daemon's --car-speed).
-  proto::WorldInfo LoadMapByName(const std::string& name, const std::string& route = "", float car_speed = 0);
+  // "": the map's first closed route; car_speed 0: the daemon's --car-speed;
+  // traffic unset: the daemon's --traffic-* flags).
+  proto::WorldInfo LoadMapByName(const std::string& name, const std::string& route = "", float car_speed = 0,
+                                 const std::optional<proto::TrafficSettings>& traffic = std::nullopt);
   // The same with the text of a map file (docs/maps.md).
-  proto::WorldInfo LoadMapText(const std::string& text, const std::string& route = "", float car_speed = 0);
+  proto::WorldInfo LoadMapText(const std::string& text, const std::string& route = "", float car_speed = 0,
+                               const std::optional<proto::TrafficSettings>& traffic = std::nullopt);
   // Adds a car (at rest, brake on; z ignored) or a UAV (hovering; z above the
   // ground, more than 0.5 m). name "": "car_<id>" / "uav_<id>". Returns the new id.
   uint32_t Spawn(proto::EntityKind kind, const std::string& name, double x, double y, double z, double yaw_deg = 0,
