@@ -4,6 +4,7 @@
 
 #include "server/common/check.h"
 #include "server/common/log.h"
+#include "server/sim/traffic_bodies.h"
 
 namespace sim4cv::daemon {
 namespace {
@@ -31,6 +32,17 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   for (const sim::Agent& agent : initial.agents) {
     header.entities.push_back({agent.id, agent.name, static_cast<uint16_t>(agent.kind), ObjectClassOf(agent.kind)});
   }
+  // Traffic (docs/maps.md, "Traffic"): every moving car and walker, so that
+  // a replay shows it where it was.
+  const traffic::TrafficIds ids = sim::TrafficIdsOf(scene);
+  for (uint32_t id = ids.cars; id < ids.walkers; ++id) {
+    header.entities.push_back({id, "traffic_car_" + std::to_string(id - ids.cars), runlog::kEntityKindCar,
+                               runlog::kObjectClassCar});
+  }
+  for (uint32_t id = ids.walkers; id < ids.end; ++id) {
+    header.entities.push_back({id, "walker_" + std::to_string(id - ids.walkers), runlog::kEntityKindPedestrian,
+                               runlog::kObjectClassPedestrian});
+  }
   for (const auto& camera : scene.cameras) {
     const sim::Agent* mount = initial.FindByName(camera.mounted_on);
     header.cameras.push_back({camera.name, mount ? mount->id : 0u, camera.width, camera.height});
@@ -43,6 +55,7 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
 RunLogger::RunLogger(const Config& config, const sim::Scene& scene, const sim::State& initial,
                      session::Counters& counters)
     : counters_(counters),
+      traffic_ids_(sim::TrafficIdsOf(scene)),
       writer_(std::make_unique<runlog::RunLogWriter>(config.log_file, MakeHeader(config, scene, initial))) {}
 
 void RunLogger::OfferFrame(const session::FrameRef& frame) {
@@ -59,6 +72,13 @@ void RunLogger::Append(const sim::State& state, const session::Scheduler& schedu
     record_.frame_id = state.frame_id;
     record_.sim_time = state.sim_time;
     for (const sim::Agent& agent : state.agents) record_.entities.push_back({agent.id, agent.body});
+    for (std::size_t i = 0; i < state.traffic.cars.size(); ++i) {
+      record_.entities.push_back({traffic_ids_.cars + static_cast<uint32_t>(i), sim::BodyOf(state.traffic.cars[i])});
+    }
+    for (std::size_t i = 0; i < state.traffic.walkers.size(); ++i) {
+      record_.entities.push_back(
+          {traffic_ids_.walkers + static_cast<uint32_t>(i), sim::BodyOf(state.traffic.walkers[i])});
+    }
     // State keeps each client's latest report until it sends another, so a
     // box recurs in every record until replaced; its frame_id tells them apart.
     for (const sim::TrackerReport& report : state.tracker_reports) {

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "sim4cv.pb.h"
+#include "server/common/check.h"
 #include "server/render/camera_math.h"
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
@@ -57,8 +58,8 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
                PoseMatrix(Eigen::Vector3f(b.centre.x(), b.centre.y(), half.z()), yaw));
   }
   if (scene.traffic) {
-    InstanceId first_id = static_cast<InstanceId>(sim::kFirstBuildingId);
-    for (const auto& object : static_labelled_) first_id = std::max<InstanceId>(first_id, object.instance + 1);
+    const traffic::TrafficIds ids = sim::TrafficIdsOf(scene);
+    for (const auto& object : static_labelled_) SIM4CV_DEMAND(object.instance < ids.parked);
     const auto add_mesh = [&](Mesh mesh) {
       meshes_.push_back(std::move(mesh));
       return static_cast<MeshId>(meshes_.size() - 1);
@@ -68,9 +69,9 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
       catalog_.AddStatic(instance, object_class, meshes_[mesh], pose);
       items_.push_back({mesh, pose, instance});
     };
-    traffic_ = std::make_unique<TrafficGraphics>(*scene.traffic, scene.car.params.chassis_half_extents,
-                                                 vehicles::Car::BoxCentreHeightAtRest(scene.car.params), first_id,
-                                                 add_mesh, add_labelled);
+    traffic_ = std::make_unique<TrafficGraphics>(*scene.traffic, ids, scene.car.params.chassis_half_extents,
+                                                 vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh,
+                                                 add_labelled);
   }
   static_item_count_ = items_.size();
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();

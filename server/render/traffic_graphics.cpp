@@ -1,5 +1,6 @@
 #include "server/render/traffic_graphics.h"
 
+#include "server/common/check.h"
 #include "server/render/camera_math.h"
 #include "server/render/mesh_builder.h"
 #include "server/render/traffic_meshes.h"
@@ -21,9 +22,9 @@ Eigen::Matrix4f GroundPose(const Eigen::Vector2d& position, double heading, doub
 
 }  // namespace
 
-TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const Eigen::Vector3d& car_half_extents,
-                                 double car_centre_height, InstanceId first_id, const AddMesh& add_mesh,
-                                 const AddStatic& add_static)
+TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids,
+                                 const Eigen::Vector3d& car_half_extents, double car_centre_height,
+                                 const AddMesh& add_mesh, const AddStatic& add_static)
     : plan_(plan), car_half_extents_(car_half_extents), car_centre_height_(car_centre_height) {
   const Eigen::Vector3f car_size = 2.0f * car_half_extents.cast<float>();
   for (int i = 0; i < kCarColours; ++i) {
@@ -33,7 +34,7 @@ TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const Eigen::
   for (const traffic::Signal signal : {traffic::Signal::kGreen, traffic::Signal::kYellow, traffic::Signal::kRed}) {
     lamp_meshes_[static_cast<std::size_t>(signal)] = add_mesh(MakeLampMesh(signal));
   }
-  InstanceId id = first_id;
+  auto id = static_cast<InstanceId>(ids.parked);
   for (std::size_t i = 0; i < plan.parked_cars().size(); ++i) {
     const traffic::Pose2& parked = plan.parked_cars()[i];
     add_static(car_meshes_[i % kCarColours], id++, proto::OBJECT_CLASS_CAR,
@@ -47,9 +48,10 @@ TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const Eigen::
       add_static(light_mesh, id++, proto::OBJECT_CLASS_TRAFFIC_LIGHT, light_poses_.back());
     }
   }
-  first_moving_car_ = id;
-  first_walker_ = first_moving_car_ + static_cast<InstanceId>(plan.car_starts().size());
-  id_bound_ = first_walker_ + static_cast<InstanceId>(plan.walker_starts().size());
+  SIM4CV_DEMAND(id == ids.cars);
+  first_moving_car_ = static_cast<InstanceId>(ids.cars);
+  first_walker_ = static_cast<InstanceId>(ids.walkers);
+  id_bound_ = static_cast<InstanceId>(ids.end);
 }
 
 void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time, std::vector<DrawItem>& items,

@@ -12,6 +12,7 @@
 #include "server/render/ground_truth.h"
 #include "server/render/object_catalog.h"
 #include "server/render/render_types.h"
+#include "server/sim/traffic/traffic_ids.h"
 #include "server/sim/traffic/traffic_state.h"
 
 namespace sim4cv::render {
@@ -26,8 +27,8 @@ class TrafficGraphics {
 
   // `car_half_extents`: the simulated car's box, which traffic cars share;
   // `car_centre_height`: where that box's centre stands at rest.
-  TrafficGraphics(const traffic::TrafficPlan& plan, const Eigen::Vector3d& car_half_extents, double car_centre_height,
-                  InstanceId first_id, const AddMesh& add_mesh, const AddStatic& add_static);
+  TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids, const Eigen::Vector3d& car_half_extents,
+                  double car_centre_height, const AddMesh& add_mesh, const AddStatic& add_static);
 
   // Appends the lit lamps, moving cars and walkers at `state` and `sim_time`
   // (ids ascending, after every static one). No allocation once warm.

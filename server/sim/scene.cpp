@@ -154,6 +154,12 @@ Scene SceneFromMap(const std::string& map_path, const std::string& route_name, f
                       camera_height);
 }
 
+traffic::TrafficIds TrafficIdsOf(const Scene& scene) {
+  // The map's objects take kFirstBuildingId.. in map order (render::BuildMapDrawables).
+  return traffic::IdsFrom(scene.traffic.get(),
+                          kFirstBuildingId + static_cast<uint32_t>(scene.map ? scene.map->objects.size() : 0));
+}
+
 void AddTraffic(Scene& scene, traffic::TrafficConfig config) {
   const bool wants_agents = config.moving_cars > 0 || config.parked_cars > 0 || config.pedestrians > 0;
   if (!scene.map) {
@@ -164,6 +170,8 @@ void AddTraffic(Scene& scene, traffic::TrafficConfig config) {
   config.traffic_lights = config.traffic_lights && scene.map->surroundings == map::Surroundings::kUrban;
   if (!wants_agents && !config.traffic_lights) return;
   scene.traffic = std::make_shared<const traffic::TrafficPlan>(*scene.map, *scene.road_graph, config);
+  SIM4CV_THROW_UNLESS(TrafficIdsOf(scene).end <= 65535, "map '" << scene.name << "' with this much traffic needs ids up to "
+                                                                << TrafficIdsOf(scene).end << "; the instance mask holds 65535");
 }
 
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height) {

@@ -10,6 +10,7 @@
 
 #include "server/sim/map/map.h"
 #include "server/sim/map/road_graph.h"
+#include "server/sim/traffic/traffic_ids.h"
 #include "server/sim/traffic/traffic_plan.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/quadcopter.h"
@@ -90,6 +91,9 @@ Scene SceneFromMap(const std::string& map_path, const std::string& route_name, f
 // The same for a map already loaded (or parsed from a client's text).
 Scene SceneFromMap(std::shared_ptr<const map::Map> map, const std::string& route_name, float car_speed,
                    uint32_t camera_width, uint32_t camera_height);
+
+// The ids of the scene's traffic (traffic_ids.h), after the map's objects.
+traffic::TrafficIds TrafficIdsOf(const Scene& scene);
 
 // Lays out traffic on a map scene (see TrafficConfig; traffic_lights applies
 // to urban maps only: desert maps are road only, as in the paper). Does

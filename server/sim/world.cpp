@@ -10,6 +10,7 @@
 #include "server/common/check.h"
 #include "server/sim/controllers.h"
 #include "server/sim/log/replay_track.h"
+#include "server/sim/traffic_bodies.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/car_driver.h"
 #include "server/sim/vehicles/quadcopter.h"
@@ -144,6 +145,7 @@ World::World(const Scene& scene)
                 kUavEntityId);
   SetUavOrder(initial_state_, kUavEntityId, follow);
   if (scene.traffic) initial_state_.traffic = traffic::InitialTraffic(*scene.traffic);
+  traffic_ids_ = TrafficIdsOf(scene);
 }
 
 World::~World() = default;
@@ -295,8 +297,9 @@ void World::SetUavOrder(State& state, uint32_t id, const UavOrder& order) {
 void World::Step(State& state, double dt) {
   SIM4CV_DEMAND(dt > 0);
   // Traffic first, from the agents' poses at the step's start, so the cars
-  // below see where the traffic will be and the order is fixed.
-  StepTraffic(state, dt);
+  // below see where the traffic will be and the order is fixed. A whole
+  // replay takes the traffic from the log too.
+  if (!replay_ || !replay_only_.empty()) StepTraffic(state, dt);
   if (replay_ && replay_only_.empty()) {
     FollowReplay(state);
   } else {
@@ -311,6 +314,18 @@ void World::FollowReplay(State& state) const {
   // by the caller after the frame's last substep.
   const uint64_t frame_id = state.frame_id + 1;
   for (Agent& agent : state.agents) Follow(replay_->Find(frame_id, agent.id), agent.body);
+  // Traffic the log holds is put where it was; the rest stands, at rest.
+  auto& traffic = state.traffic;
+  for (std::size_t i = 0; i < traffic.cars.size(); ++i) {
+    BodyState body = BodyOf(traffic.cars[i]);
+    Follow(replay_->Find(frame_id, traffic_ids_.cars + static_cast<uint32_t>(i)), body);
+    PlaceAt(body, traffic.cars[i]);
+  }
+  for (std::size_t i = 0; i < traffic.walkers.size(); ++i) {
+    BodyState body = BodyOf(traffic.walkers[i]);
+    Follow(replay_->Find(frame_id, traffic_ids_.walkers + static_cast<uint32_t>(i)), body);
+    PlaceAt(body, traffic.walkers[i]);
+  }
 }
 
 void World::StepPhysics(State& state, double dt) {

@@ -109,6 +109,7 @@ class World {
   std::shared_ptr<const runlog::ReplayTrack> replay_;
   std::vector<uint32_t> replay_only_;  // sorted; empty: all
   std::vector<traffic::Obstacle> obstacles_;  // the agents' cars, for traffic: reused every step
+  traffic::TrafficIds traffic_ids_;           // what the traffic's entities are called in logs
 };
 
 // The ids of a State's agents, as "1 ('car'), 2 ('uav')": for Error messages.
