@@ -64,14 +64,16 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
       meshes_.push_back(std::move(mesh));
       return static_cast<MeshId>(meshes_.size() - 1);
     };
-    const auto add_labelled = [&](MeshId mesh, InstanceId instance, uint32_t object_class, const Eigen::Matrix4f& pose) {
-      static_labelled_.push_back({instance, object_class, 0});
-      catalog_.AddStatic(instance, object_class, meshes_[mesh], pose);
+    const auto add_item = [&](MeshId mesh, InstanceId instance, uint32_t object_class, const Eigen::Matrix4f& pose) {
+      if (instance != kUnlabelled) {
+        static_labelled_.push_back({instance, object_class, 0});
+        catalog_.AddStatic(instance, object_class, meshes_[mesh], pose);
+      }
       items_.push_back({mesh, pose, instance});
     };
     traffic_ = std::make_unique<TrafficGraphics>(*scene.traffic, ids, scene.car.params.chassis_half_extents,
                                                  vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh,
-                                                 add_labelled);
+                                                 add_item);
   }
   static_item_count_ = items_.size();
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();

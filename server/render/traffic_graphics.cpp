@@ -34,6 +34,9 @@ TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const traffic
   for (const traffic::Signal signal : {traffic::Signal::kGreen, traffic::Signal::kYellow, traffic::Signal::kRed}) {
     lamp_meshes_[static_cast<std::size_t>(signal)] = add_mesh(MakeLampMesh(signal));
   }
+  if (!plan.crosswalks().empty()) {
+    add_static(add_mesh(MakeCrosswalkMarkings(plan.crosswalks())), kUnlabelled, 0, Eigen::Matrix4f::Identity());
+  }
   auto id = static_cast<InstanceId>(ids.parked);
   for (std::size_t i = 0; i < plan.parked_cars().size(); ++i) {
     const traffic::Pose2& parked = plan.parked_cars()[i];

@@ -21,7 +21,7 @@ class TrafficGraphics {
  public:
   // Adds a mesh to the scene's list and returns its id.
   using AddMesh = std::function<MeshId(Mesh mesh)>;
-  // Adds a static, labelled draw item.
+  // Adds a static draw item (labelled unless `instance` is kUnlabelled).
   using AddStatic = std::function<void(MeshId mesh, InstanceId instance, uint32_t object_class,
                                        const Eigen::Matrix4f& world_from_model)>;
 

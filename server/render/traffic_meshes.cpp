@@ -1,9 +1,11 @@
 #include "server/render/traffic_meshes.h"
 
+#include <Eigen/Geometry>
 #include <array>
 
 #include "server/render/map_mesh_util.h"
 #include "server/render/mesh_builder.h"
+#include "server/render/road_meshes.h"
 
 namespace sim4cv::render {
 namespace {
@@ -106,6 +108,28 @@ Mesh MakeLampMesh(Signal signal) { return MakeBox({0.005f, kLampHalf - 0.01f, kL
 Eigen::Vector3f LampOffset(Signal signal) {
   // The plate's back face 5 mm in front of the dark lamp's face.
   return {kHousingFront + kLampDepth + 0.005f + 0.005f, 0.0f, LampHeight(signal)};
+}
+
+Mesh MakeCrosswalkMarkings(const std::vector<traffic::TrafficPlan::Crosswalk>& crosswalks) {
+  // Stripes 0.5 m wide, 1 m apart, across both 4 m lanes.
+  constexpr double kStripeHalf = 0.25, kPitch = 1.0, kRoadHalf = map::kLaneWidth;
+  const Vector3f white(0.92f, 0.92f, 0.90f);
+  Mesh mesh;
+  for (const traffic::TrafficPlan::Crosswalk& crosswalk : crosswalks) {
+    for (double lateral = -kRoadHalf + kPitch / 2; lateral < kRoadHalf; lateral += kPitch) {
+      const auto corner = [&](double across, double along) {
+        const Eigen::Vector2d p = crosswalk.middle + crosswalk.across * across + crosswalk.along * along;
+        return Vector3f(static_cast<float>(p.x()), static_cast<float>(p.y()), kMarkingHeight);
+      };
+      const double half = traffic::kCrosswalkHalfWidth;
+      std::array<Vector3f, 4> quad = {corner(lateral - kStripeHalf, -half), corner(lateral + kStripeHalf, -half),
+                                      corner(lateral + kStripeHalf, half), corner(lateral - kStripeHalf, half)};
+      // Counter-clockwise seen from above, whichever way across/along turn.
+      if ((quad[1] - quad[0]).cross(quad[2] - quad[0]).z() < 0) std::swap(quad[1], quad[3]);
+      mapmesh::AddFlatQuad(mesh, quad, white);
+    }
+  }
+  return mesh;
 }
 
 Eigen::Vector3f TrafficCarColour(uint32_t variant) {

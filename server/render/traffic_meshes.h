@@ -6,9 +6,11 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <vector>
 
 #include "server/render/render_types.h"
 #include "server/sim/traffic/signal.h"
+#include "server/sim/traffic/traffic_plan.h"
 
 namespace sim4cv::render {
 
@@ -37,6 +39,12 @@ Mesh MakeTrafficLightMesh();
 // where it sits 5 mm in front of that signal's dark lamp. 12 triangles.
 Mesh MakeLampMesh(traffic::Signal signal);
 Eigen::Vector3f LampOffset(traffic::Signal signal);
+
+// Zebra markings of every crosswalk: white stripes along the road across
+// both lanes, kCrosswalkHalfWidth either side of its middle, just above the
+// asphalt (road_meshes.h's marking height). Flat, unlabelled, in world
+// coordinates. 2 triangles a stripe.
+Mesh MakeCrosswalkMarkings(const std::vector<traffic::TrafficPlan::Crosswalk>& crosswalks);
 
 // The body colour of traffic car number `variant` (parked or moving): common
 // car colours, neighbouring variants different, the target car's red and

@@ -188,6 +188,7 @@ void TrafficPlan::AddCrosswalk(const map::Map& map, const Eigen::Vector2d& middl
     }
     return kMinReach;
   };
+  crosswalks_.push_back({middle, across.normalized(), along.normalized()});
   // Lines side by side across the crosswalk, walked from alternate
   // pavements, so walkers on one crosswalk pass without meeting.
   for (int line = 0; line < kWalkLines; ++line) {

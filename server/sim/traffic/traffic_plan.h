@@ -61,6 +61,14 @@ class TrafficPlan {
     std::vector<LaneCrossing> crossings;
   };
 
+  // Where a crosswalk crosses the road (its kWalkLines walking lines run
+  // side by side across it): what the road's zebra markings are drawn from.
+  struct Crosswalk {
+    Eigen::Vector2d middle{0, 0};  // on the road's centre line
+    Eigen::Vector2d across{0, 0};  // unit, across the road
+    Eigen::Vector2d along{0, 0};   // unit, along the road
+  };
+
   // A static obstacle that reaches into the lanes: an object of the map
   // standing on the road. Moving cars stop behind it.
   struct RoadObstacle {
@@ -95,6 +103,7 @@ class TrafficPlan {
   const std::vector<Junction>& junctions() const { return junctions_; }
   const std::vector<Light>& lights() const { return lights_; }
   const std::vector<WalkPath>& walk_paths() const { return walk_paths_; }
+  const std::vector<Crosswalk>& crosswalks() const { return crosswalks_; }
   const std::vector<Pose2>& parked_cars() const { return parked_cars_; }
   const std::vector<RoadObstacle>& road_obstacles() const { return road_obstacles_; }
   const std::vector<CarStart>& car_starts() const { return car_starts_; }
@@ -137,6 +146,7 @@ class TrafficPlan {
   std::vector<Junction> junctions_;
   std::vector<Light> lights_;
   std::vector<WalkPath> walk_paths_;
+  std::vector<Crosswalk> crosswalks_;
   std::vector<Pose2> parked_cars_;
   std::vector<RoadObstacle> road_obstacles_;
   std::vector<CarStart> car_starts_;
