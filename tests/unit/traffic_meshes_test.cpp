@@ -121,6 +121,28 @@ TEST(TrafficMeshesTest, ATrafficLightIsAPoleWithLampsFacingPlusX) {
   }
 }
 
+TEST(TrafficMeshesTest, CrosswalkMarkingsAreFlatStripesAcrossBothLanesFacingUp) {
+  // One crosswalk across a north-south road at (10, 20), one across an east-west road.
+  const std::vector<traffic::TrafficPlan::Crosswalk> crosswalks = {{{10, 20}, {1, 0}, {0, 1}}, {{-5, 0}, {0, -1}, {1, 0}}};
+  const Mesh mesh = MakeCrosswalkMarkings(crosswalks);
+  ASSERT_EQ(mesh.indices.size() / 3, 2u * 8u * 2u) << "8 stripes of 2 triangles per crosswalk";
+  for (std::size_t t = 0; t < mesh.indices.size(); t += 3) {
+    const auto corner = [&](int k) {
+      const auto& p = mesh.vertices[mesh.indices[t + k]].position;
+      return Eigen::Vector3f(p[0], p[1], p[2]);
+    };
+    EXPECT_GT((corner(1) - corner(0)).cross(corner(2) - corner(0)).z(), 0.0f) << "counter-clockwise from above";
+    for (int k = 0; k < 3; ++k) EXPECT_FLOAT_EQ(corner(k).z(), 0.07f) << "on the road, at the markings' height";
+  }
+  for (const Vertex& v : mesh.vertices) {
+    const bool first = v.position[1] > 10;
+    const float across = first ? v.position[0] - 10 : -v.position[1];
+    const float along = first ? v.position[1] - 20 : v.position[0] + 5;
+    EXPECT_LE(std::abs(across), 4.0f) << "within the road's two lanes";
+    EXPECT_LE(std::abs(along), 1.5f + 1e-5f);
+  }
+}
+
 TEST(TrafficMeshesTest, TrafficCarColoursDifferFromNeighboursAndFromTheSimulatedVehicles) {
   for (uint32_t variant = 0; variant < 40; ++variant) {
     const Eigen::Vector3f colour = TrafficCarColour(variant);
