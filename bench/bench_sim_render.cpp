@@ -107,7 +107,8 @@ int main(int argc, char** argv) {
   const auto render = bench::Summarize(frame_ms);
   std::printf("render: %ux%u, %zu triangles in the scene, renderer %s\n", width, height, triangles,
               gl->RendererName().c_str());
-  std::printf("render: %d frames (RGB+depth+mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: %.0f fps\n",
-              frames, render.median, render.p99, render.max, 1e3 / render.mean);
+  std::printf(
+      "render: %d frames (RGB+depth+mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: %.0f fps\n",
+      frames, render.median, render.p99, render.max, 1e3 / render.mean);
   return 0;
 }

@@ -20,7 +20,8 @@ T ParseNumber(const std::string& flag, const std::string& text, T low, T high) {
   T value{};
   in >> value;
   SIM4CV_THROW_UNLESS(in && in.eof(), flag << " expects a number, got '" << text << "'");
-  SIM4CV_THROW_UNLESS(value >= low && value <= high, flag << " is " << text << "; it must be in [" << low << ", " << high << "]");
+  SIM4CV_THROW_UNLESS(value >= low && value <= high,
+                      flag << " is " << text << "; it must be in [" << low << ", " << high << "]");
   return value;
 }
 
@@ -178,18 +179,19 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
     setter->second(args[i], args[i + 1]);
     ++i;
   }
-  SIM4CV_THROW_UNLESS(config.scene_file.empty() || config.map_file.empty(),
-                      "--scene and --map both given; pick one");
+  SIM4CV_THROW_UNLESS(config.scene_file.empty() || config.map_file.empty(), "--scene and --map both given; pick one");
   SIM4CV_THROW_UNLESS(config.log_label.empty() || !config.log_file.empty(), "--log-label needs --log FILE");
   if (!config.traffic_seed_set) config.traffic.seed = config.seed;
   SIM4CV_THROW_UNLESS(config.replay_only.empty() || !config.replay_file.empty(),
                       "--replay-only needs --replay FILE: it says which entities follow that log");
   // The writer truncates its file before replay could read it.
-  SIM4CV_THROW_UNLESS(config.log_file.empty() || config.log_file != config.replay_file,
-                      "--log and --replay both name '" << config.log_file << "'; recording would erase the replayed log");
+  SIM4CV_THROW_UNLESS(
+      config.log_file.empty() || config.log_file != config.replay_file,
+      "--log and --replay both name '" << config.log_file << "'; recording would erase the replayed log");
   const double ratio = config.physics_hz / config.frame_hz;
-  SIM4CV_THROW_UNLESS(std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1,
-                      "--physics-hz " << config.physics_hz << " must be a whole multiple of --frame-hz " << config.frame_hz);
+  SIM4CV_THROW_UNLESS(
+      std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1,
+      "--physics-hz " << config.physics_hz << " must be a whole multiple of --frame-hz " << config.frame_hz);
   return config;
 }
 

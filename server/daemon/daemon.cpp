@@ -50,22 +50,21 @@ int RunDaemon(const Config& config) {
   signal(SIGPIPE, SIG_IGN);  // a client that vanishes must not kill the daemon
   signal(SIGXFSZ, SIG_IGN);  // a run log over the file size limit is a write error, not death
 
-  sim::Scene loaded = !config.map_file.empty()
-                         ? sim::SceneFromMap(config.map_file, config.route, config.car_speed, config.width, config.height)
-                     : config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
-                                                 : sim::LoadSceneFile(config.scene_file, config.width, config.height);
+  sim::Scene loaded = !config.map_file.empty()    ? sim::SceneFromMap(config.map_file, config.route, config.car_speed,
+                                                                      config.width, config.height)
+                      : config.scene_file.empty() ? sim::DefaultScene(config.width, config.height)
+                                                  : sim::LoadSceneFile(config.scene_file, config.width, config.height);
   sim::AddTraffic(loaded, config.traffic);
   const auto initial_scene = std::make_shared<const sim::Scene>(std::move(loaded));
   const sim::Scene& scene = *initial_scene;
 
   std::vector<std::unique_ptr<transport::Transport>> transports;
-  transports.push_back(transport::MakeTcpTransport(
-      {config.bind_address, config.tcp_port, config.max_clients, config.max_message_bytes,
-       config.tcp_send_buffer_bytes}));
+  transports.push_back(transport::MakeTcpTransport({config.bind_address, config.tcp_port, config.max_clients,
+                                                    config.max_message_bytes, config.tcp_send_buffer_bytes}));
   if (config.udp_port >= 0) {
-    transports.push_back(transport::MakeUdpTransport({config.bind_address, static_cast<uint16_t>(config.udp_port),
-                                                      config.udp_datagram_bytes, config.udp_expiry_ms,
-                                                      config.max_clients}));
+    transports.push_back(
+        transport::MakeUdpTransport({config.bind_address, static_cast<uint16_t>(config.udp_port),
+                                     config.udp_datagram_bytes, config.udp_expiry_ms, config.max_clients}));
   }
   if (!config.shm_name.empty()) {
     const int shm_camera = scene.FindCamera(config.shm_camera);
@@ -83,9 +82,8 @@ int RunDaemon(const Config& config) {
   session::LatestState latest_state;
   session::Counters counters;
   session::WorldDirectory directory;
-  const session::ServerContext context{scene,        config.mode,  MakeWelcome(config, transports),
-                                       directory,    commands,     latest_state,
-                                       config.max_message_bytes,   counters};
+  const session::ServerContext context{scene,    config.mode,  MakeWelcome(config, transports), directory,
+                                       commands, latest_state, config.max_message_bytes,        counters};
   SimThread sim(config, initial_scene, commands, latest_state, directory, counters);
   sim.Start();
   for (auto& t : transports) t->Start(context);

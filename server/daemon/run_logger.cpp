@@ -11,9 +11,12 @@ namespace {
 
 uint16_t ObjectClassOf(sim::AgentKind kind) {
   switch (kind) {
-    case sim::AgentKind::kCar: return runlog::kObjectClassCar;
-    case sim::AgentKind::kUav: return runlog::kObjectClassUav;
-    case sim::AgentKind::kPedestrian: return runlog::kObjectClassPedestrian;
+    case sim::AgentKind::kCar:
+      return runlog::kObjectClassCar;
+    case sim::AgentKind::kUav:
+      return runlog::kObjectClassUav;
+    case sim::AgentKind::kPedestrian:
+      return runlog::kObjectClassPedestrian;
   }
   return 0;
 }
@@ -36,8 +39,8 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   // a replay shows it where it was.
   const traffic::TrafficIds ids = sim::TrafficIdsOf(scene);
   for (uint32_t id = ids.cars; id < ids.walkers; ++id) {
-    header.entities.push_back({id, "traffic_car_" + std::to_string(id - ids.cars), runlog::kEntityKindCar,
-                               runlog::kObjectClassCar});
+    header.entities.push_back(
+        {id, "traffic_car_" + std::to_string(id - ids.cars), runlog::kEntityKindCar, runlog::kObjectClassCar});
   }
   for (uint32_t id = ids.walkers; id < ids.end; ++id) {
     header.entities.push_back({id, "walker_" + std::to_string(id - ids.walkers), runlog::kEntityKindPedestrian,
@@ -93,7 +96,8 @@ void RunLogger::Append(const sim::State& state, const session::Scheduler& schedu
     } catch (const std::exception& error) {
       Fail(error);
     }
-    append_ns_ += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count();
+    append_ns_ +=
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count();
   }
   record_.Clear();
 }
@@ -126,9 +130,9 @@ void RunLogger::Fail(const std::exception& error) {
 std::shared_ptr<const runlog::ReplayTrack> LoadReplayTrack(const Config& config, const sim::Scene& scene) {
   auto track = std::make_shared<const runlog::ReplayTrack>(runlog::ReplayTrack::Load(config.replay_file));
   const runlog::RunLogHeader& header = track->header();
-  SIM4CV_THROW_UNLESS(header.scene_name == scene.name, config.replay_file << " was recorded on scene '" << header.scene_name
-                                                                          << "', not '" << scene.name
-                                                                          << "'; start with its --map or --scene");
+  SIM4CV_THROW_UNLESS(header.scene_name == scene.name,
+                      config.replay_file << " was recorded on scene '" << header.scene_name << "', not '" << scene.name
+                                         << "'; start with its --map or --scene");
   SIM4CV_THROW_UNLESS(header.frame_hz == config.frame_hz, config.replay_file << " was recorded at --frame-hz "
                                                                              << header.frame_hz << ", not "
                                                                              << config.frame_hz);

@@ -31,7 +31,10 @@ struct Overloaded : Handlers... {
 SimThread::SimThread(const Config& config, std::shared_ptr<const sim::Scene> scene, session::CommandQueue& commands,
                      session::LatestState& latest_state, session::WorldDirectory& directory,
                      session::Counters& counters)
-    : config_(config), commands_(commands), latest_state_(latest_state), directory_(directory),
+    : config_(config),
+      commands_(commands),
+      latest_state_(latest_state),
+      directory_(directory),
       sim_(config_, std::move(scene)) {
   const sim::Scene& scene_ref = sim_.scene();
   if (!config.log_file.empty()) {
@@ -107,7 +110,8 @@ void SimThread::RunLockstep() {
 
 void SimThread::RunRealtime() {
   using Clock = std::chrono::steady_clock;
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.frame_hz));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.frame_hz));
   auto next_frame = Clock::now() + period;
   while (running_) {
     commands_.WaitUntil(next_frame);
@@ -152,8 +156,9 @@ void SimThread::ApplyCommands() {
                    [&](session::TrackerOutputCommand& c) {
                      sim::TrackerReport report{client, c.frame_id, c.x, c.y, c.width, c.height, c.confidence};
                      auto& reports = sim_.state().tracker_reports;
-                     auto it = std::lower_bound(reports.begin(), reports.end(), client,
-                                                [](const sim::TrackerReport& r, uint32_t id) { return r.client_id < id; });
+                     auto it =
+                         std::lower_bound(reports.begin(), reports.end(), client,
+                                          [](const sim::TrackerReport& r, uint32_t id) { return r.client_id < id; });
                      if (it != reports.end() && it->client_id == client) {
                        *it = report;
                      } else {

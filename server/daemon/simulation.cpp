@@ -68,19 +68,36 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
   Change change;
   answer.set_request_id(request.request_id());
   switch (request.request_case()) {
-    case Kind::kLoadMap: LoadMap(request.load_map(), change); break;
+    case Kind::kLoadMap:
+      LoadMap(request.load_map(), change);
+      break;
     case Kind::kReset:
       RefuseWhileLogging("Reset", "a log's frame ids must increase");
       Rebuild(scene_, change);
       break;
-    case Kind::kSpawn: answer.set_entity_id(Spawn(request.spawn())); break;
-    case Kind::kRemove: RemoveEntity(request.remove().entity_id(), change); break;
-    case Kind::kSetRoute: SetRoute(request.set_route()); break;
-    case Kind::kCommandUav: CommandUav(request.command_uav()); break;
-    case Kind::kAddCamera: AddCamera(request.add_camera()); break;
-    case Kind::kRemoveCamera: RemoveCamera(request.remove_camera().name(), change); break;
-    case Kind::kQueryRoad: QueryRoad(request.query_road(), *answer.mutable_road()); break;
-    case Kind::kGetWorld: break;
+    case Kind::kSpawn:
+      answer.set_entity_id(Spawn(request.spawn()));
+      break;
+    case Kind::kRemove:
+      RemoveEntity(request.remove().entity_id(), change);
+      break;
+    case Kind::kSetRoute:
+      SetRoute(request.set_route());
+      break;
+    case Kind::kCommandUav:
+      CommandUav(request.command_uav());
+      break;
+    case Kind::kAddCamera:
+      AddCamera(request.add_camera());
+      break;
+    case Kind::kRemoveCamera:
+      RemoveCamera(request.remove_camera().name(), change);
+      break;
+    case Kind::kQueryRoad:
+      QueryRoad(request.query_road(), *answer.mutable_road());
+      break;
+    case Kind::kGetWorld:
+      break;
     case Kind::REQUEST_NOT_SET:
       throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "Configure carries no request");
   }
@@ -121,8 +138,8 @@ void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
       sim::AddTraffic(built, TrafficFor(load));
     } catch (const std::invalid_argument& error) {
       // The plan names the daemon flag; say where this request's numbers came from.
-      throw std::invalid_argument(std::string(load.has_traffic() ? "LoadMap.traffic: " : "the daemon's traffic flags: ") +
-                                  error.what());
+      throw std::invalid_argument(
+          std::string(load.has_traffic() ? "LoadMap.traffic: " : "the daemon's traffic flags: ") + error.what());
     }
     return std::make_shared<const sim::Scene>(std::move(built));
   });
@@ -143,18 +160,17 @@ traffic::TrafficConfig Simulation::TrafficFor(const proto::LoadMap& load) const 
 
 void Simulation::RefuseWhileLogging(const char* request, const char* why) const {
   if (config_.log_file.empty()) return;
-  throw ConfigureError(proto::ERROR_CODE_INVALID_STATE, std::string(request) +
-                                                            " is refused while the daemon writes the run log --log " +
-                                                            config_.log_file + ": " + why +
-                                                            "; start another sim4cvd without --log for this");
+  throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
+                       std::string(request) + " is refused while the daemon writes the run log --log " +
+                           config_.log_file + ": " + why + "; start another sim4cvd without --log for this");
 }
 
 const sim::Agent& Simulation::AgentOf(uint32_t id, const char* what) const {
   const sim::Agent* agent = state_.Find(id);
   if (!agent) {
-    throw ConfigureError(proto::ERROR_CODE_UNKNOWN_ENTITY, std::string(what) + ": no entity has id " +
-                                                               std::to_string(id) + "; the world holds " +
-                                                               sim::AgentList(state_));
+    throw ConfigureError(
+        proto::ERROR_CODE_UNKNOWN_ENTITY,
+        std::string(what) + ": no entity has id " + std::to_string(id) + "; the world holds " + sim::AgentList(state_));
   }
   return *agent;
 }
@@ -164,8 +180,8 @@ uint32_t Simulation::Spawn(const proto::Spawn& spawn) {
   const auto kind = static_cast<sim::AgentKind>(spawn.kind());  // CheckConfigure let only the three kinds through
   if (spawn.snap_to_lane() && kind == sim::AgentKind::kCar) {
     if (!scene_->road_graph) {
-      throw ConfigureError(proto::ERROR_CODE_INVALID_STATE, "Spawn.snap_to_lane needs a map scene; scene '" +
-                                                                scene_->name + "' has no lanes");
+      throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
+                           "Spawn.snap_to_lane needs a map scene; scene '" + scene_->name + "' has no lanes");
     }
     const map::LaneProjection nearest = scene_->road_graph->Nearest(pose.position.head<2>());
     pose.position.head<2>() = nearest.lane.position;
@@ -245,8 +261,8 @@ void Simulation::CommandUav(const proto::CommandUav& command) {
 
 void Simulation::AddCamera(const proto::AddCamera& camera) {
   if (FindCamera(camera.name()) >= 0) {
-    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "AddCamera.name: a camera named '" + camera.name() +
-                                                                 "' already exists");
+    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
+                         "AddCamera.name: a camera named '" + camera.name() + "' already exists");
   }
   if (!camera.mounted_on().empty() && !state_.FindByName(camera.mounted_on())) {
     throw ConfigureError(proto::ERROR_CODE_UNKNOWN_ENTITY, "AddCamera.mounted_on: no entity is named '" +
@@ -270,8 +286,10 @@ void Simulation::AddCamera(const proto::AddCamera& camera) {
   if (live >= kMaxCameras || cameras_.size() >= kMaxCameraIndices) {
     throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
                          "the world has " + std::to_string(live) + " cameras (at most " + std::to_string(kMaxCameras) +
-                             ") and " + std::to_string(cameras_.size()) + " camera indices used since the map was "
-                             "loaded (at most " + std::to_string(kMaxCameraIndices) + "); remove one, or Reset");
+                             ") and " + std::to_string(cameras_.size()) +
+                             " camera indices used since the map was "
+                             "loaded (at most " +
+                             std::to_string(kMaxCameraIndices) + "); remove one, or Reset");
   }
   cameras_.push_back(std::move(spec));
 }
@@ -297,8 +315,8 @@ void Simulation::QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult
   }
   const map::RoadGraph& graph = *scene_->road_graph;
   const Eigen::Vector2d point(query.point().x(), query.point().y());
-  const map::LaneProjection nearest = query.use_heading() ? graph.Nearest(point, query.heading_deg() * kDegrees)
-                                                          : graph.Nearest(point);
+  const map::LaneProjection nearest =
+      query.use_heading() ? graph.Nearest(point, query.heading_deg() * kDegrees) : graph.Nearest(point);
   SetLanePoint(nearest.lane, *out.mutable_nearest());
   out.set_distance(nearest.distance);
   out.set_lateral_offset(nearest.lateral_offset);

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <numbers>
 
-#include "sim4cv.pb.h"
 #include "server/common/check.h"
 #include "server/render/camera_math.h"
 #include "server/render/map_meshes.h"
@@ -13,6 +12,7 @@
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/gimbal.h"
 #include "server/sim/world.h"
+#include "sim4cv.pb.h"
 
 namespace sim4cv::render {
 namespace {
@@ -23,8 +23,11 @@ Eigen::Matrix4f BodyPose(const sim::BodyState& body) {
 
 // A stable, pleasant colour per building so frames are easy to read.
 Eigen::Vector3f BuildingColour(std::size_t index) {
-  static const Eigen::Vector3f palette[] = {{0.62f, 0.55f, 0.48f}, {0.50f, 0.52f, 0.58f}, {0.70f, 0.64f, 0.52f},
-                                            {0.45f, 0.40f, 0.38f}, {0.58f, 0.60f, 0.55f}};
+  static const Eigen::Vector3f palette[] = {{0.62f, 0.55f, 0.48f},
+                                            {0.50f, 0.52f, 0.58f},
+                                            {0.70f, 0.64f, 0.52f},
+                                            {0.45f, 0.40f, 0.38f},
+                                            {0.58f, 0.60f, 0.55f}};
   return palette[index % std::size(palette)];
 }
 
@@ -41,19 +44,21 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   };
   if (scene.map) {
     // Tile maps bring their own ground, roads and labelled dressing.
-    for (auto& drawable : BuildMapDrawables(*scene.map, *scene.road_graph, static_cast<InstanceId>(sim::kFirstBuildingId))) {
+    for (auto& drawable :
+         BuildMapDrawables(*scene.map, *scene.road_graph, static_cast<InstanceId>(sim::kFirstBuildingId))) {
       add_static(std::move(drawable.mesh), drawable.instance, drawable.object_class, drawable.world_from_model);
     }
   } else {
     add_static(MakeGroundPlane(scene.ground_half_size, {0.55f, 0.50f, 0.40f}), kUnlabelled, 0,
                Eigen::Matrix4f::Identity());
-    add_static(MakeRoadLoop(scene.road_loop, scene.lane_width, {0.22f, 0.22f, 0.24f}, {0.95f, 0.95f, 0.92f}), kUnlabelled,
-               0, Eigen::Matrix4f::Identity());
+    add_static(MakeRoadLoop(scene.road_loop, scene.lane_width, {0.22f, 0.22f, 0.24f}, {0.95f, 0.95f, 0.92f}),
+               kUnlabelled, 0, Eigen::Matrix4f::Identity());
   }
   for (std::size_t i = 0; i < scene.buildings.size(); ++i) {
     const auto& b = scene.buildings[i];
     const Eigen::Vector3f half(b.half_size.x(), b.half_size.y(), b.height / 2.0f);
-    const Eigen::Quaternionf yaw(Eigen::AngleAxisf(b.yaw_deg * std::numbers::pi_v<float> / 180.0f, Eigen::Vector3f::UnitZ()));
+    const Eigen::Quaternionf yaw(
+        Eigen::AngleAxisf(b.yaw_deg * std::numbers::pi_v<float> / 180.0f, Eigen::Vector3f::UnitZ()));
     add_static(MakeBox(half, BuildingColour(i)), static_cast<InstanceId>(b.id), proto::OBJECT_CLASS_BUILDING,
                PoseMatrix(Eigen::Vector3f(b.centre.x(), b.centre.y(), half.z()), yaw));
   }
@@ -71,9 +76,9 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
       }
       items_.push_back({mesh, pose, instance});
     };
-    traffic_ = std::make_unique<TrafficGraphics>(*scene.traffic, ids, scene.car.params.chassis_half_extents,
-                                                 vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh,
-                                                 add_item);
+    traffic_ =
+        std::make_unique<TrafficGraphics>(*scene.traffic, ids, scene.car.params.chassis_half_extents,
+                                          vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh, add_item);
   }
   static_item_count_ = items_.size();
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();
@@ -88,7 +93,8 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   pedestrian_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   // Agents take the ids below the static objects' (sim::kMaxAgentId).
   instance_id_bound_ = sim::kMaxAgentId + 1;
-  for (const auto& object : static_labelled_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
+  for (const auto& object : static_labelled_)
+    instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
   if (traffic_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, traffic_->id_bound());
 }
 
@@ -102,8 +108,9 @@ void SceneGraphics::Update(const sim::State& state) {
       // Its body stands on its feet; its box is centred half its height up.
       items_.push_back({pedestrian_mesh_, BodyPose(agent.body), instance});
       labelled_.push_back({instance, proto::OBJECT_CLASS_PEDESTRIAN, 0});
-      moving_.push_back({instance, proto::OBJECT_CLASS_PEDESTRIAN, agent.body.position + kPedestrianBox.z() * Eigen::Vector3d::UnitZ(),
-                         agent.body.orientation, agent.body.linear_velocity, agent.body.angular_velocity, kPedestrianBox});
+      moving_.push_back({instance, proto::OBJECT_CLASS_PEDESTRIAN,
+                         agent.body.position + kPedestrianBox.z() * Eigen::Vector3d::UnitZ(), agent.body.orientation,
+                         agent.body.linear_velocity, agent.body.angular_velocity, kPedestrianBox});
       continue;
     }
     const bool car = agent.kind == sim::AgentKind::kCar;

@@ -14,11 +14,10 @@ Eigen::Quaternionf Heading(double heading) {
 }
 
 Eigen::Matrix4f GroundPose(const Eigen::Vector2d& position, double heading, double z) {
-  return PoseMatrix(Eigen::Vector3f(static_cast<float>(position.x()), static_cast<float>(position.y()),
-                                    static_cast<float>(z)),
-                    Heading(heading));
+  return PoseMatrix(
+      Eigen::Vector3f(static_cast<float>(position.x()), static_cast<float>(position.y()), static_cast<float>(z)),
+      Heading(heading));
 }
-
 
 }  // namespace
 
@@ -67,8 +66,8 @@ void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time
     items.push_back({lamp_meshes_[static_cast<std::size_t>(signal)], lamp, light_ids_[i]});
   }
   // `draw_z`: where the mesh's origin stands; `box_z`: the 3D box's centre.
-  const auto add = [&](MeshId mesh, InstanceId id, uint32_t object_class, const Eigen::Vector3d& ground,
-                       double heading, double draw_z, double box_z, const Eigen::Vector3d& half_extents,
+  const auto add = [&](MeshId mesh, InstanceId id, uint32_t object_class, const Eigen::Vector3d& ground, double heading,
+                       double draw_z, double box_z, const Eigen::Vector3d& half_extents,
                        const Eigen::Vector3d& velocity, double yaw_rate) {
     items.push_back({mesh, GroundPose(ground.head<2>(), heading, draw_z), id});
     labelled.push_back({id, object_class, 0});

@@ -27,8 +27,9 @@ class TrafficGraphics {
 
   // `car_half_extents`: the simulated car's box, which traffic cars share;
   // `car_centre_height`: where that box's centre stands at rest.
-  TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids, const Eigen::Vector3d& car_half_extents,
-                  double car_centre_height, const AddMesh& add_mesh, const AddStatic& add_static);
+  TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids,
+                  const Eigen::Vector3d& car_half_extents, double car_centre_height, const AddMesh& add_mesh,
+                  const AddStatic& add_static);
 
   // Appends the lit lamps, moving cars and walkers at `state` and `sim_time`
   // (ids ascending, after every static one). No allocation once warm.

@@ -57,14 +57,22 @@ Outcome ClientProtocol::Handle(const proto::Envelope& request, proto::Envelope& 
                   true, reply);
   }
   switch (kind) {
-    case Kind::kHello: return HandleHello(request.hello(), reply);
-    case Kind::kSubscribe: return HandleSubscribe(request.subscribe(), reply);
-    case Kind::kStep: return HandleStep(reply);
-    case Kind::kControls: return HandleControls(request.controls(), reply);
-    case Kind::kTrackerOutput: return HandleTrackerOutput(request.tracker_output(), reply);
-    case Kind::kGetState: return HandleGetState(reply);
-    case Kind::kGetStats: return HandleGetStats(reply);
-    case Kind::kConfigure: return HandleConfigure(request.configure(), reply);
+    case Kind::kHello:
+      return HandleHello(request.hello(), reply);
+    case Kind::kSubscribe:
+      return HandleSubscribe(request.subscribe(), reply);
+    case Kind::kStep:
+      return HandleStep(reply);
+    case Kind::kControls:
+      return HandleControls(request.controls(), reply);
+    case Kind::kTrackerOutput:
+      return HandleTrackerOutput(request.tracker_output(), reply);
+    case Kind::kGetState:
+      return HandleGetState(reply);
+    case Kind::kGetStats:
+      return HandleGetStats(reply);
+    case Kind::kConfigure:
+      return HandleConfigure(request.configure(), reply);
     default:
       return Refuse(proto::ERROR_CODE_UNEXPECTED_MESSAGE,
                     "envelope field " + std::to_string(static_cast<int>(kind)) +
@@ -111,8 +119,8 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
                   "no camera named '" + subscribe.camera() + "'; this scene has " + camera_names, false, reply);
   }
   if (subscribe.channels_size() == 0) {
-    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, "Subscribe.channels is empty; ask for at least one channel", false,
-                  reply);
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, "Subscribe.channels is empty; ask for at least one channel",
+                  false, reply);
   }
   uint32_t seen = 0;
   for (int channel : subscribe.channels()) {
@@ -129,9 +137,10 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
   }
   const proto::Delivery delivery = subscribe.delivery();
   if (delivery != proto::DELIVERY_LOCKSTEP && delivery != proto::DELIVERY_NEWEST) {
-    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
-                  "Subscribe.delivery is " + std::to_string(delivery) + "; use DELIVERY_LOCKSTEP (1) or DELIVERY_NEWEST (2)",
-                  false, reply);
+    return Refuse(
+        proto::ERROR_CODE_INVALID_ARGUMENT,
+        "Subscribe.delivery is " + std::to_string(delivery) + "; use DELIVERY_LOCKSTEP (1) or DELIVERY_NEWEST (2)",
+        false, reply);
   }
   if (delivery == proto::DELIVERY_LOCKSTEP && context_.mode != proto::SIM_MODE_LOCKSTEP) {
     return Refuse(proto::ERROR_CODE_INVALID_STATE,
@@ -169,9 +178,9 @@ Outcome ClientProtocol::HandleStep(proto::Envelope& reply) {
 }
 
 Outcome ClientProtocol::HandleControls(const proto::Controls& controls, proto::Envelope& reply) {
-  for (const std::string& problem :
-       {CheckRange("Controls.steering", controls.steering(), -1, 1), CheckRange("Controls.throttle", controls.throttle(), 0, 1),
-        CheckRange("Controls.brake", controls.brake(), 0, 1)}) {
+  for (const std::string& problem : {CheckRange("Controls.steering", controls.steering(), -1, 1),
+                                     CheckRange("Controls.throttle", controls.throttle(), 0, 1),
+                                     CheckRange("Controls.brake", controls.brake(), 0, 1)}) {
     if (!problem.empty()) return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
   }
   // Whether entity_id is a car the sim thread checks, and answers an Error through the link if not.

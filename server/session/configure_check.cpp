@@ -20,7 +20,9 @@ class Checker {
   Checker& Finite(const char* field, double value) { return Range(field, value, -1e6, 1e6); }
   Checker& Vec(const char* field, const proto::Vec3& v) {
     const std::string name(field);
-    return Finite((name + ".x").c_str(), v.x()).Finite((name + ".y").c_str(), v.y()).Finite((name + ".z").c_str(), v.z());
+    return Finite((name + ".x").c_str(), v.x())
+        .Finite((name + ".y").c_str(), v.y())
+        .Finite((name + ".z").c_str(), v.z());
   }
   Checker& True(bool condition, const std::string& problem) {
     if (problem_.empty() && !condition) problem_ = problem;
@@ -28,8 +30,8 @@ class Checker {
   }
   Checker& Name(const char* field, const std::string& value, bool may_be_empty) {
     return True(may_be_empty || !value.empty(), std::string(field) + " is empty; give it a name")
-        .True(value.size() <= 64, std::string(field) + " is " + std::to_string(value.size()) +
-                                      " characters long; at most 64");
+        .True(value.size() <= 64,
+              std::string(field) + " is " + std::to_string(value.size()) + " characters long; at most 64");
   }
   std::string problem() const { return problem_; }
 
@@ -44,16 +46,17 @@ std::string CheckLoadMap(const proto::LoadMap& load) {
     const std::string& name = load.name();
     check.Name("LoadMap.name", name, false)
         .True(name.find("..") == std::string::npos && (name.empty() || name.front() != '/'),
-              "LoadMap.name '" + name + "' must be a shipped map's name relative to the maps folder, e.g. "
-                                        "'tracking/hard_urban' (no '..', no leading '/')");
+              "LoadMap.name '" + name +
+                  "' must be a shipped map's name relative to the maps folder, e.g. "
+                  "'tracking/hard_urban' (no '..', no leading '/')");
   }
   if (load.has_traffic()) {
     check.Range("LoadMap.traffic.cars", load.traffic().cars(), 0, 500)
         .Range("LoadMap.traffic.parked", load.traffic().parked(), 0, 2000)
         .Range("LoadMap.traffic.pedestrians", load.traffic().pedestrians(), 0, 2000);
   }
-  check.True(load.text().size() <= (4u << 20), "LoadMap.text is " + std::to_string(load.text().size()) +
-                                                   " bytes; a map text may have at most 4 MiB");
+  check.True(load.text().size() <= (4u << 20),
+             "LoadMap.text is " + std::to_string(load.text().size()) + " bytes; a map text may have at most 4 MiB");
   return check.Range("LoadMap.car_speed", load.car_speed(), 0, 40).problem();
 }
 
@@ -71,8 +74,7 @@ std::string CheckSpawn(const proto::Spawn& spawn) {
 
 std::string CheckSetRoute(const proto::SetRoute& route) {
   Checker check;
-  check.True(route.path_case() != proto::SetRoute::PATH_NOT_SET,
-             "SetRoute needs route_name, waypoints or keep_route");
+  check.True(route.path_case() != proto::SetRoute::PATH_NOT_SET, "SetRoute needs route_name, waypoints or keep_route");
   if (route.has_waypoints()) {
     const auto& points = route.waypoints().points();
     check.True(points.size() >= 2 && points.size() <= 100000,
@@ -137,17 +139,26 @@ std::string CheckQueryRoad(const proto::QueryRoad& query) {
 std::string CheckConfigure(const proto::Configure& request) {
   using Kind = proto::Configure::RequestCase;
   switch (request.request_case()) {
-    case Kind::kLoadMap: return CheckLoadMap(request.load_map());
-    case Kind::kSpawn: return CheckSpawn(request.spawn());
-    case Kind::kSetRoute: return CheckSetRoute(request.set_route());
-    case Kind::kCommandUav: return CheckCommandUav(request.command_uav());
-    case Kind::kAddCamera: return CheckAddCamera(request.add_camera());
-    case Kind::kRemoveCamera: return Checker().Name("RemoveCamera.name", request.remove_camera().name(), false).problem();
-    case Kind::kQueryRoad: return CheckQueryRoad(request.query_road());
+    case Kind::kLoadMap:
+      return CheckLoadMap(request.load_map());
+    case Kind::kSpawn:
+      return CheckSpawn(request.spawn());
+    case Kind::kSetRoute:
+      return CheckSetRoute(request.set_route());
+    case Kind::kCommandUav:
+      return CheckCommandUav(request.command_uav());
+    case Kind::kAddCamera:
+      return CheckAddCamera(request.add_camera());
+    case Kind::kRemoveCamera:
+      return Checker().Name("RemoveCamera.name", request.remove_camera().name(), false).problem();
+    case Kind::kQueryRoad:
+      return CheckQueryRoad(request.query_road());
     case Kind::kRemove:
     case Kind::kReset:
-    case Kind::kGetWorld: return {};
-    case Kind::REQUEST_NOT_SET: break;
+    case Kind::kGetWorld:
+      return {};
+    case Kind::REQUEST_NOT_SET:
+      break;
   }
   return "Configure carries no request (empty oneof, or a field number this server does not know)";
 }

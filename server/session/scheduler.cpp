@@ -50,7 +50,7 @@ void Scheduler::ConsumeSteps() {
 
 bool Scheduler::CameraWanted(uint32_t camera_index) const {
   return !Dead(camera_index) && std::any_of(subscriptions_.begin(), subscriptions_.end(),
-                     [&](const Subscription& s) { return s.camera_index == camera_index; });
+                                            [&](const Subscription& s) { return s.camera_index == camera_index; });
 }
 
 std::optional<uint32_t> Scheduler::CameraOf(ClientId client) const {

@@ -63,13 +63,11 @@ class Scheduler {
   };
   Subscription* Find(ClientId client);
   void OfferToSubscribers(const FrameRef& frame) const;
-  bool Dead(uint32_t camera_index) const {
-    return camera_index < dead_cameras_.size() && dead_cameras_[camera_index];
-  }
+  bool Dead(uint32_t camera_index) const { return camera_index < dead_cameras_.size() && dead_cameras_[camera_index]; }
 
   std::vector<Subscription> subscriptions_;  // ordered by client id
   ClientLink* observer_ = nullptr;
-  std::vector<FrameRef> held_;  // frames awaiting ReleaseFrames; keeps its capacity
+  std::vector<FrameRef> held_;      // frames awaiting ReleaseFrames; keeps its capacity
   std::vector<bool> dead_cameras_;  // by camera index; missing: alive
 };
 

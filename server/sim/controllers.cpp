@@ -32,8 +32,7 @@ vehicles::QuadcopterCommand UavCommandFor(const UavOrder& order, const BodyState
         // The target's centripetal acceleration is fed forward so the UAV
         // does not lag in bends.
         const UavSetpoint station = FollowTarget(order, target->body);
-        const Eigen::Vector3d turn_acceleration =
-            target->body.angular_velocity.cross(target->body.linear_velocity);
+        const Eigen::Vector3d turn_acceleration = target->body.angular_velocity.cross(target->body.linear_velocity);
         return QuadcopterCommand::Hold(station.position, station.yaw, station.velocity, station.yaw_rate,
                                        turn_acceleration);
       }

@@ -7,7 +7,8 @@
 namespace sim4cv::sim {
 
 const Agent* State::Find(uint32_t id) const {
-  const auto at = std::lower_bound(agents.begin(), agents.end(), id, [](const Agent& a, uint32_t wanted) { return a.id < wanted; });
+  const auto at =
+      std::lower_bound(agents.begin(), agents.end(), id, [](const Agent& a, uint32_t wanted) { return a.id < wanted; });
   return at != agents.end() && at->id == id ? &*at : nullptr;
 }
 

@@ -39,13 +39,13 @@ struct UavOrder {
     kVelocity,  // fly `velocity` (world frame) turning at `yaw_rate`
   };
   Mode mode = Mode::kFollow;
-  uint32_t target = 0;                                  // kFollow: entity id
-  double altitude = 15.0;                               // kFollow: m above the target
-  double pitch_down_deg = 60.0;                         // kFollow: the gimbal pitch that frames the target
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();   // kHold, m
-  double yaw = 0.0;                                     // kHold, rad
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();   // kVelocity, m/s
-  double yaw_rate = 0.0;                                // kVelocity, rad/s
+  uint32_t target = 0;                                 // kFollow: entity id
+  double altitude = 15.0;                              // kFollow: m above the target
+  double pitch_down_deg = 60.0;                        // kFollow: the gimbal pitch that frames the target
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // kHold, m
+  double yaw = 0.0;                                    // kHold, rad
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // kVelocity, m/s
+  double yaw_rate = 0.0;                               // kVelocity, rad/s
 };
 
 // Values of the protocol's EntityKind (sim4cv.proto).
@@ -59,10 +59,10 @@ struct Agent {
   AgentKind kind = AgentKind::kCar;
   std::string name;
   BodyState body;
-  CarCommand car_command;    // cars
-  float cruise_speed = 0.0f; // cars and pedestrians: the set speed along the route; 0 with no route
-  double walked = 0.0;       // pedestrians: metres along their route
-  UavOrder uav_order;        // UAVs
+  CarCommand car_command;     // cars
+  float cruise_speed = 0.0f;  // cars and pedestrians: the set speed along the route; 0 with no route
+  double walked = 0.0;        // pedestrians: metres along their route
+  UavOrder uav_order;         // UAVs
 };
 
 // The latest box a client's tracker reported, as applied by the simulation.
@@ -74,11 +74,11 @@ struct TrackerReport {
 };
 
 struct State {
-  uint64_t frame_id = 0;       // frames completed; frame N is rendered after N frame periods
-  uint64_t physics_steps = 0;  // substeps taken since start
-  double sim_time = 0.0;       // seconds
-  std::vector<Agent> agents;   // ordered by id
-  traffic::TrafficState traffic;  // the map's moving cars and walkers (empty without traffic)
+  uint64_t frame_id = 0;                       // frames completed; frame N is rendered after N frame periods
+  uint64_t physics_steps = 0;                  // substeps taken since start
+  double sim_time = 0.0;                       // seconds
+  std::vector<Agent> agents;                   // ordered by id
+  traffic::TrafficState traffic;               // the map's moving cars and walkers (empty without traffic)
   std::vector<TrackerReport> tracker_reports;  // one per client that reported, ordered by client id
 
   // The agent with this id, or nullptr.

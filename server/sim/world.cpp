@@ -37,9 +37,12 @@ void Follow(const BodyState* logged, BodyState& body) {
 
 const char* KindName(AgentKind kind) {
   switch (kind) {
-    case AgentKind::kCar: return "car";
-    case AgentKind::kUav: return "UAV";
-    case AgentKind::kPedestrian: return "pedestrian";
+    case AgentKind::kCar:
+      return "car";
+    case AgentKind::kUav:
+      return "UAV";
+    case AgentKind::kPedestrian:
+      return "pedestrian";
   }
   return "?";
 }
@@ -102,18 +105,16 @@ struct World::Bodies {
   }
 };
 
-World::World(const Scene& scene)
-    : scene_(scene),
-      car_lane_(scene.car_lane),
-      bodies_(std::make_unique<Bodies>()) {
+World::World(const Scene& scene) : scene_(scene), car_lane_(scene.car_lane), bodies_(std::make_unique<Bodies>()) {
   auto& b = *bodies_;
   b.world.setGravity(btVector3(0, 0, -9.81));
   b.AddStatic(std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0), btTransform::getIdentity());
   for (const auto& building : scene.buildings) {
     const btTransform pose(btQuaternion(btVector3(0, 0, 1), btScalar(building.yaw_deg * std::numbers::pi / 180.0)),
                            btVector3(building.centre.x(), building.centre.y(), building.height / 2.0f));
-    b.AddStatic(std::make_unique<btBoxShape>(btVector3(building.half_size.x(), building.half_size.y(), building.height / 2.0f)),
-                pose);
+    b.AddStatic(
+        std::make_unique<btBoxShape>(btVector3(building.half_size.x(), building.half_size.y(), building.height / 2.0f)),
+        pose);
   }
   if (scene.map) {
     for (const auto& object : scene.map->objects) {
@@ -170,10 +171,11 @@ uint32_t World::Spawn(State& state, AgentKind kind, const std::string& name, con
     ++id;
   }
   SIM4CV_THROW_UNLESS(id <= kMaxAgentId, "the world already holds " << kMaxAgentId << " agents, the most it can");
-  const std::string agent_name =
-      name.empty() ? std::string(kind == AgentKind::kCar ? "car_" : kind == AgentKind::kUav ? "uav_" : "pedestrian_") +
-                         std::to_string(id)
-                   : name;
+  const std::string agent_name = name.empty() ? std::string(kind == AgentKind::kCar   ? "car_"
+                                                            : kind == AgentKind::kUav ? "uav_"
+                                                                                      : "pedestrian_") +
+                                                    std::to_string(id)
+                                              : name;
   SIM4CV_THROW_UNLESS(!state.FindByName(agent_name), "an entity named '" << agent_name << "' already exists");
 
   auto& b = *bodies_;
@@ -226,7 +228,8 @@ void World::Remove(State& state, uint32_t id) {
   state.agents.erase(state.agents.begin() + index);
   bodies_->vehicles.erase(bodies_->vehicles.begin() + index);
   for (Agent& other : state.agents) {
-    if (other.kind == AgentKind::kUav && other.uav_order.mode == UavOrder::Mode::kFollow && other.uav_order.target == id) {
+    if (other.kind == AgentKind::kUav && other.uav_order.mode == UavOrder::Mode::kFollow &&
+        other.uav_order.target == id) {
       other.uav_order.mode = UavOrder::Mode::kHold;
       other.uav_order.position = other.body.position;
       other.uav_order.yaw = other.body.Yaw();
@@ -241,8 +244,8 @@ void World::SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> pat
   SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40,
                       "route speed " << speed << " m/s is outside [0, 40]");
   SIM4CV_THROW_UNLESS(path.size() >= 2, "a route needs at least 2 points; got " << path.size());
-  vehicle.driver = std::make_unique<vehicles::CarDriver>(scene_.car.params, vehicles::Polyline(std::move(path), closed),
-                                                         speed);
+  vehicle.driver =
+      std::make_unique<vehicles::CarDriver>(scene_.car.params, vehicles::Polyline(std::move(path), closed), speed);
   Agent& agent = *state.Find(id);
   agent.cruise_speed = speed;
   agent.car_command.manual = false;
@@ -272,7 +275,8 @@ void World::SetCruiseSpeed(State& state, uint32_t id, float speed) {
     return;
   }
   Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetSpeed");
-  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40, "speed " << speed << " m/s is outside [0, 40]");
+  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40,
+                      "speed " << speed << " m/s is outside [0, 40]");
   SIM4CV_THROW_UNLESS(vehicle.driver, "car " << id << " has no route to drive at " << speed
                                              << " m/s; give it one (SetRoute) or drive it with Controls");
   vehicle.driver->set_speed(speed);
@@ -351,7 +355,8 @@ void World::StepPhysics(State& state, double dt) {
         const CarCommand& c = agent.car_command;
         controls = {c.steering, c.throttle, c.brake, false};
       } else {
-        if (scene_.traffic) vehicle.driver->set_speed(SpeedForTraffic(state, agent, vehicle.driver->path()));
+        if (AnythingToGiveWayTo(state))
+          vehicle.driver->set_speed(SpeedForTraffic(state, agent, vehicle.driver->path()));
         controls = vehicle.driver->Update(vehicle.car->State(), dt);
         agent.car_command = {static_cast<float>(controls.steering), static_cast<float>(controls.throttle),
                              static_cast<float>(controls.brake), false};

@@ -95,8 +95,12 @@ class World {
   void StepWalker(const Vehicle& vehicle, Agent& walker, double dt);
   void SetWalk(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed);
   void StepTraffic(State& state, double dt);
-  // Slows a car's waypoint follower for traffic standing or moving ahead on
-  // its path, so it neither drives through a car nor runs down a walker.
+  // Whether a car's follower must look out for others (traffic, other
+  // simulated cars, spawned pedestrians): the look-ahead costs a path search.
+  bool AnythingToGiveWayTo(const State& state) const;
+  // Slows a car's waypoint follower for traffic, other simulated cars and
+  // pedestrians standing or moving ahead on its path, so it neither drives
+  // through a car nor runs down a walker.
   double SpeedForTraffic(const State& state, const Agent& car, const vehicles::Polyline& path) const;
   void FollowReplay(State& state) const;
   // Whether entity `id` follows the log (only while a replay is set).
@@ -107,7 +111,7 @@ class World {
   std::unique_ptr<Bodies> bodies_;
   State initial_state_;  // taken when the scene's bodies were spawned
   std::shared_ptr<const runlog::ReplayTrack> replay_;
-  std::vector<uint32_t> replay_only_;  // sorted; empty: all
+  std::vector<uint32_t> replay_only_;         // sorted; empty: all
   std::vector<traffic::Obstacle> obstacles_;  // the agents' cars, for traffic: reused every step
   traffic::TrafficIds traffic_ids_;           // what the traffic's entities are called in logs
 };

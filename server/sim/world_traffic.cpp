@@ -1,9 +1,9 @@
 // The World's side of a map's traffic (server/sim/traffic): stepping it with
 // the simulated cars as obstacles, and slowing those cars for it.
-#include "server/sim/world.h"
-
 #include <algorithm>
 #include <cmath>
+
+#include "server/sim/world.h"
 
 namespace sim4cv::sim {
 namespace {
@@ -23,13 +23,22 @@ void World::StepTraffic(State& state, double dt) {
   if (state.physics_steps % every != 0) return;
   dt *= static_cast<double>(every);
   obstacles_.clear();
+  // Spawned pedestrians count as well: traffic cars stop for them, and
+  // walkers keep off them.
   for (const Agent& agent : state.agents) {
-    if (agent.kind != AgentKind::kCar) continue;
+    if (agent.kind == AgentKind::kUav) continue;
     const double yaw = agent.body.Yaw();
     const double speed = agent.body.linear_velocity.head<2>().dot(Eigen::Vector2d(std::cos(yaw), std::sin(yaw)));
     obstacles_.push_back({agent.body.position.head<2>(), yaw, std::max(0.0, speed)});
   }
   traffic::StepTraffic(*scene_.traffic, state.traffic, state.sim_time, dt, obstacles_);
+}
+
+bool World::AnythingToGiveWayTo(const State& state) const {
+  if (scene_.traffic) return true;
+  int others = 0;  // cars and pedestrians; one car alone has nobody to meet
+  for (const Agent& agent : state.agents) others += agent.kind != AgentKind::kUav ? 1 : 0;
+  return others > 1;
 }
 
 double World::SpeedForTraffic(const State& state, const Agent& car, const vehicles::Polyline& path) const {
@@ -50,6 +59,16 @@ double World::SpeedForTraffic(const State& state, const Agent& car, const vehicl
     if (ahead > 0 && ahead < kLookAhead) gap = std::min(gap, ahead - standoff);
   };
   for (const traffic::MovingCar& other : state.traffic.cars) consider(other.position.head<2>(), 1.8, 6.0);
+  // The other simulated cars and the spawned pedestrians, likewise.
+  for (const Agent& other : state.agents) {
+    if (other.id == car.id || other.kind == AgentKind::kUav) continue;
+    const bool walking = other.body.linear_velocity.squaredNorm() > 0.0;
+    if (other.kind == AgentKind::kCar) {
+      consider(other.body.position.head<2>(), 1.8, 6.0);
+    } else {
+      consider(other.body.position.head<2>(), walking ? 2.2 : 1.2, 4.0);
+    }
+  }
   // A walker on the move may step into the lane: keep a wide berth. One
   // standing at the kerb waits for this very car to pass (it gives way to
   // simulated cars), so only one standing in the lane stops it.

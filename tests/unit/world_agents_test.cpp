@@ -61,12 +61,17 @@ TEST_F(WorldAgentsTest, SpawnTakesTheLowestFreeIdAndAUniqueName) {
   world_.Remove(state_, a);
   EXPECT_EQ(state_.Find(a), nullptr);
   EXPECT_EQ(world_.Spawn(state_, AgentKind::kUav, "", {{0, 0, 10}, 0}), 3u) << "the freed id is reused";
-  EXPECT_NE(ErrorOf([&] { world_.Spawn(state_, AgentKind::kCar, "blue", {{0, 0, 0}, 0}); })
-                .find("an entity named 'blue' already exists"),
+  EXPECT_NE(ErrorOf([&] {
+              world_.Spawn(state_, AgentKind::kCar, "blue", {{0, 0, 0}, 0});
+            }).find("an entity named 'blue' already exists"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { world_.Spawn(state_, AgentKind::kUav, "low", {{0, 0, 0.1}, 0}); }).find("z is 0.1"),
+  EXPECT_NE(ErrorOf([&] {
+              world_.Spawn(state_, AgentKind::kUav, "low", {{0, 0, 0.1}, 0});
+            }).find("z is 0.1"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { world_.Spawn(state_, AgentKind::kCar, "", {{NAN, 0, 0}, 0}); }).find("not finite"),
+  EXPECT_NE(ErrorOf([&] {
+              world_.Spawn(state_, AgentKind::kCar, "", {{NAN, 0, 0}, 0});
+            }).find("not finite"),
             std::string::npos);
   // Stepping with the new agents runs, and the parked car stays put.
   const Eigen::Vector3d parked = state_.Find(b)->body.position;
@@ -77,15 +82,19 @@ TEST_F(WorldAgentsTest, SpawnTakesTheLowestFreeIdAndAUniqueName) {
 TEST_F(WorldAgentsTest, ErrorsNameTheIdAndTheKind) {
   EXPECT_NE(ErrorOf([&] { world_.Remove(state_, 42); }).find("no entity has id 42; the world holds 1 ('car', car), 2"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { world_.SetRoute(state_, kUavEntityId, {{0, 0}, {1, 1}}, false, 3); })
-                .find("entity 2 ('uav') is a UAV, not a car"),
+  EXPECT_NE(ErrorOf([&] {
+              world_.SetRoute(state_, kUavEntityId, {{0, 0}, {1, 1}}, false, 3);
+            }).find("entity 2 ('uav') is a UAV, not a car"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { world_.SetRoute(state_, kCarEntityId, {{0, 0}, {1, 1}}, false, 99); }).find("speed 99"),
+  EXPECT_NE(ErrorOf([&] {
+              world_.SetRoute(state_, kCarEntityId, {{0, 0}, {1, 1}}, false, 99);
+            }).find("speed 99"),
             std::string::npos);
   const uint32_t car = world_.Spawn(state_, AgentKind::kCar, "", {{30, -60, 0}, 0});
   EXPECT_NE(ErrorOf([&] { world_.SetCruiseSpeed(state_, car, 4); }).find("has no route"), std::string::npos);
-  EXPECT_NE(ErrorOf([&] { world_.SetUavOrder(state_, kUavEntityId, {UavOrder::Mode::kFollow, 77}); })
-                .find("cannot follow entity 77"),
+  EXPECT_NE(ErrorOf([&] {
+              world_.SetUavOrder(state_, kUavEntityId, {UavOrder::Mode::kFollow, 77});
+            }).find("cannot follow entity 77"),
             std::string::npos);
 }
 
@@ -216,8 +225,37 @@ TEST_F(WorldAgentsTest, APedestrianWalksItsRouteAndStandsAtItsEnd) {
   Simulate(world_, state_, 20.0);
   EXPECT_LT((state_.Find(walker)->body.position - Eigen::Vector3d(10, -10, 0)).norm(), 1e-6) << "and stands at its end";
   EXPECT_TRUE(state_.Find(walker)->body.linear_velocity.isZero());
-  EXPECT_NE(ErrorOf([&] { world_.SetRoute(state_, walker, {{0, 0}, {1, 0}}, false, 12.0f); }).find("walking speed 12"),
+  EXPECT_NE(ErrorOf([&] {
+              world_.SetRoute(state_, walker, {{0, 0}, {1, 0}}, false, 12.0f);
+            }).find("walking speed 12"),
             std::string::npos);
+}
+
+}  // namespace
+}  // namespace sim4cv::sim
+
+namespace sim4cv::sim {
+namespace {
+
+// The scene's car (driving east along y = -42 from x = -40 at the start)
+// meets a pedestrian standing in its lane, then a parked spawned car: it
+// stops short of each, and drives on once the way is clear.
+TEST_F(WorldAgentsTest, TheCarStopsForAPedestrianAndACarInItsLane) {
+  const Eigen::Vector2d start = state_.Find(kCarEntityId)->body.position.head<2>();
+  const uint32_t walker = world_.Spawn(state_, AgentKind::kPedestrian, "", {{start.x() + 30, start.y(), 0}, 0});
+  Simulate(world_, state_, 15.0);
+  const BodyState& car = state_.Find(kCarEntityId)->body;
+  const double to_walker = (state_.Find(walker)->body.position - car.position).head<2>().norm();
+  EXPECT_GT(to_walker, 3.0) << "stopped short of the pedestrian";
+  EXPECT_LT(to_walker, 6.0) << "but not far short";
+  EXPECT_LT(car.linear_velocity.norm(), 0.1);
+  world_.Remove(state_, walker);
+  const uint32_t parked = world_.Spawn(state_, AgentKind::kCar, "", {{start.x() + 55, start.y(), 0}, 0});
+  Simulate(world_, state_, 15.0);
+  const double to_parked =
+      (state_.Find(parked)->body.position - state_.Find(kCarEntityId)->body.position).head<2>().norm();
+  EXPECT_GT(to_parked, 5.0) << "stopped behind the car, bodies apart";
+  EXPECT_LT(to_parked, 8.0);
 }
 
 }  // namespace

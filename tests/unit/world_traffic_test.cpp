@@ -85,9 +85,10 @@ TEST_P(TargetInTraffic, TheTargetCarKeepsClearOfTrafficAndWalkers) {
   EXPECT_GT(nearest_walker, 0.6) << "the target car brushed past or ran into a walker";
   EXPECT_GT(travelled, 120.0) << "the target still gets somewhere in 90 s";
   EXPECT_LT(longest_stop, 30.0) << "no deadlock between the target and traffic";
-  std::printf("target car in traffic for 90 s: %.0f m driven, longest stop %.1f s, nearest traffic car body %.2f m, "
-              "nearest walker %.2f m from its body\n",
-              travelled, longest_stop, nearest_car, nearest_walker);
+  std::printf(
+      "target car in traffic for 90 s: %.0f m driven, longest stop %.1f s, nearest traffic car body %.2f m, "
+      "nearest walker %.2f m from its body\n",
+      travelled, longest_stop, nearest_car, nearest_walker);
 }
 
 TEST(WorldTrafficTest, TwoRunsWithTrafficAreBitIdentical) {
