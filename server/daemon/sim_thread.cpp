@@ -148,9 +148,7 @@ void SimThread::ApplyCommands() {
   for (auto& command : drained_) {
     const session::ClientId client = command.client;
     std::visit(Overloaded{
-                   [&](session::SubscribeCommand& c) {
-                     scheduler_.Subscribe(client, c.camera_index, c.delivery, std::move(c.link));
-                   },
+                   [&](session::SubscribeCommand& c) { Subscribe(client, c); },
                    [&](session::StepCommand&) { scheduler_.AddStep(client); },
                    [&](session::ControlsCommand& c) { ApplyControls(c); },
                    [&](session::TrackerOutputCommand& c) {
@@ -171,6 +169,22 @@ void SimThread::ApplyCommands() {
                command.body);
   }
   drained_.clear();  // drop links held by commands before waiting again
+}
+
+void SimThread::Subscribe(session::ClientId client, session::SubscribeCommand& subscribe) {
+  const auto& cameras = sim_.cameras();
+  if (subscribe.camera_index < cameras.size() && !cameras[subscribe.camera_index].name.empty()) {
+    scheduler_.Subscribe(client, subscribe.camera_index, subscribe.delivery, std::move(subscribe.link));
+    return;
+  }
+  // The camera went (RemoveCamera, Remove, Reset, LoadMap) between the
+  // network thread's check and now.
+  if (!subscribe.link) return;
+  proto::Envelope reply;
+  reply.mutable_error()->set_code(proto::ERROR_CODE_UNKNOWN_CAMERA);
+  reply.mutable_error()->set_message("the camera you subscribed to was removed before the subscription took effect; "
+                                     "subscribe to a camera the world has (GetWorld lists them)");
+  subscribe.link->OfferReply(std::move(reply));
 }
 
 void SimThread::ApplyControls(session::ControlsCommand& controls) {

@@ -50,6 +50,7 @@ class SimThread {
   void RunLockstep();
   void RunRealtime();
   void ApplyCommands();
+  void Subscribe(session::ClientId client, session::SubscribeCommand& subscribe);
   void ApplyControls(session::ControlsCommand& controls);
   void Configure(session::ConfigureCommand& command);
   void AfterChange(const Simulation::Change& change);
