@@ -46,6 +46,12 @@ SIM4CV_SHM_CONSTANT(kShmResponseDataBytes, 1984)
 SIM4CV_SHM_CONSTANT(kShmResponseDepth, 8)
 /* Every slot, entry and pixel plane starts on a multiple of this. */
 SIM4CV_SHM_CONSTANT(kShmAlignment, 64)
+/* Pixel channels (proto Channel) and their bits in the channel masks. */
+SIM4CV_SHM_CONSTANT(kShmChannelRgb, 1)
+SIM4CV_SHM_CONSTANT(kShmChannelDepth, 2)
+SIM4CV_SHM_CONSTANT(kShmChannelMask, 3)
+/* (1 << RGB) | (1 << DEPTH) | (1 << MASK): a ring carrying every pixel channel. */
+SIM4CV_SHM_CONSTANT(kShmAllPixelChannels, 0x0e)
 
 /* The object starts with this header (512 bytes). Lines of 64 bytes group
  * fields by writer so that readers polling one line do not share it with
@@ -78,7 +84,11 @@ typedef struct ShmHeader {
   uint32_t expiry_ms;          /* 136: a client silent this long is disconnected */
   uint32_t protocol_version;   /* 140: the Envelope protocol version (Hello) */
   uint64_t response_entry_bytes; /* 144: bytes per response entry */
-  uint8_t reserved2[40];       /* 152 */
+  /* Bit (1 << channel) per pixel channel the slots carry (--shm-channels);
+   * kShmAllPixelChannels by default. 0 in objects from daemons that predate
+   * the field: they always carried all three. */
+  uint32_t channel_mask;       /* 152 */
+  uint8_t reserved2[36];       /* 156 */
   /* Line 3: the frame writer (the daemon's sim thread). */
   uint64_t published;          /* 192: frames published; the newest is in slot (published-1) % slot_count */
   uint64_t newest_frame_id;    /* 200: frame_id of that frame (0: none yet) */
@@ -144,14 +154,14 @@ typedef struct ShmFrameHeader {
   int64_t render_end_mono_ns;  /*   32: CLOCK_MONOTONIC */
   uint32_t width;              /*   40 */
   uint32_t height;             /*   44 */
-  uint32_t channel_mask;       /*   48: bit (1 << channel) per channel present (0x0e) */
-  uint32_t channel_count;      /*   52: entries used in channels[] (3) */
+  uint32_t channel_mask;       /*   48: bit (1 << channel) per channel present (= ShmHeader.channel_mask) */
+  uint32_t channel_count;      /*   52: records in channels[] (3: RGB, DEPTH, MASK; an absent one is all zero) */
   uint32_t box_count;          /*   56: entries used in boxes[] */
   uint32_t box_total;          /*   60: visible labelled objects (> box_count if truncated) */
   uint32_t entity_count;       /*   64: entries used in entities[] */
   uint32_t camera_index;       /*   68: index of the camera in Welcome.cameras */
   uint8_t reserved0[56];       /*   72 */
-  ShmChannel channels[4];      /*  128: RGB, DEPTH, MASK (in this order), one unused */
+  ShmChannel channels[4];      /*  128: RGB, DEPTH, MASK (in this order; zero if absent), one unused */
   ShmBox boxes[128];           /*  256: ordered by object_id */
   ShmEntityPose entities[8];   /* 4352: ordered by id */
   uint8_t reserved1[2944];     /* 5248 */
@@ -189,6 +199,7 @@ SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmHeader) == 512, "ShmHeader is 512 bytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, camera_name) == 64, "ShmHeader line 1");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_message_bytes) == 128, "ShmHeader line 2");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_entry_bytes) == 144, "ShmHeader.response_entry_bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, channel_mask) == 152, "ShmHeader.channel_mask");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, published) == 192, "ShmHeader line 3");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, frame_futex) == 208, "ShmHeader.frame_futex");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, closed) == 216, "ShmHeader.closed");

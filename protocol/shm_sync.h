@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cstdint>
 #include <ctime>
+#include <string>
 
 #include "protocol/shm_layout.h"
 
@@ -63,22 +64,52 @@ constexpr uint64_t AlignUp(uint64_t value, uint64_t alignment) {
   return (value + alignment - 1) / alignment * alignment;
 }
 
-// Where everything lives in an object with the given parameters.
+// Bit of a pixel channel (kShmChannelRgb ...) in a channel mask.
+constexpr uint32_t ChannelBit(uint32_t channel) { return 1u << channel; }
+
+// The daemon flag's name of a pixel channel (--shm-channels rgb,depth,mask); "" for others.
+constexpr const char* ChannelFlagName(uint32_t channel) {
+  return channel == kShmChannelRgb     ? "rgb"
+         : channel == kShmChannelDepth ? "depth"
+         : channel == kShmChannelMask  ? "mask"
+                                       : "";
+}
+
+// A channel mask as --shm-channels writes it, e.g. "rgb,mask".
+inline std::string ChannelFlagValue(uint32_t channel_mask) {
+  std::string value;
+  for (uint32_t channel = kShmChannelRgb; channel <= kShmChannelMask; ++channel) {
+    if ((channel_mask & ChannelBit(channel)) != 0)
+      value.append(value.empty() ? "" : ",").append(ChannelFlagName(channel));
+  }
+  return value;
+}
+
+// Where everything lives in an object with the given parameters. A slot holds
+// only the planes of `channel_mask`, packed in the order RGB, DEPTH, MASK:
+// smaller slots are less to copy past and more of them stay in cache.
 struct Geometry {
-  uint64_t rgb_offset = 0, depth_offset = 0, mask_offset = 0;  // within a slot
+  uint64_t rgb_offset = 0, depth_offset = 0, mask_offset = 0;  // within a slot; 0: channel absent
   uint64_t slot_bytes = 0;
   uint64_t slots_offset = 0, reply_offset = 0, response_offset = 0, response_entry_bytes = 0;
   uint64_t total_bytes = 0;
 };
 
 inline Geometry ComputeGeometry(uint32_t width, uint32_t height, uint32_t slot_count, uint32_t reply_capacity,
-                                uint32_t response_entries) {
+                                uint32_t response_entries, uint32_t channel_mask = kShmAllPixelChannels) {
   const uint64_t pixels = static_cast<uint64_t>(width) * height;
+  uint64_t end = kShmFrameHeaderBytes;
+  auto place = [&](uint32_t channel, uint64_t bytes_per_pixel) -> uint64_t {
+    if ((channel_mask & ChannelBit(channel)) == 0) return 0;
+    const uint64_t offset = AlignUp(end, kShmAlignment);
+    end = offset + pixels * bytes_per_pixel;
+    return offset;
+  };
   Geometry g;
-  g.rgb_offset = kShmFrameHeaderBytes;
-  g.depth_offset = AlignUp(g.rgb_offset + pixels * 3, kShmAlignment);
-  g.mask_offset = AlignUp(g.depth_offset + pixels * 4, kShmAlignment);
-  g.slot_bytes = AlignUp(g.mask_offset + pixels * 2, 4096);
+  g.rgb_offset = place(kShmChannelRgb, 3);
+  g.depth_offset = place(kShmChannelDepth, 4);
+  g.mask_offset = place(kShmChannelMask, 2);
+  g.slot_bytes = AlignUp(end, 4096);
   g.slots_offset = 4096;
   g.reply_offset = g.slots_offset + g.slot_bytes * slot_count;
   g.response_offset = g.reply_offset + static_cast<uint64_t>(kShmReplySlotBytes) * reply_capacity;

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "protocol/shm_sync.h"
 #include "server/common/check.h"
 
 namespace sim4cv::daemon {
@@ -33,6 +34,25 @@ std::vector<uint32_t> ParseIdList(const std::string& flag, const std::string& te
   while (std::getline(items, item, ',')) ids.push_back(ParseNumber<uint32_t>(flag, item, 1, 65535));
   SIM4CV_THROW_UNLESS(!ids.empty(), flag << " is '" << text << "'; give entity ids separated by commas, e.g. 1");
   return ids;
+}
+
+// "rgb,depth": the pixel channels the shared-memory ring carries, as a channel mask.
+uint32_t ParseChannelList(const std::string& flag, const std::string& text) {
+  uint32_t mask = 0;
+  for (std::size_t start = 0;;) {
+    const std::size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    uint32_t channel = shm::kShmChannelRgb;
+    while (channel <= shm::kShmChannelMask && item != shm::ChannelFlagName(channel)) ++channel;
+    SIM4CV_THROW_UNLESS(channel <= shm::kShmChannelMask,
+                        flag << " is '" << text << "'; '" << item
+                             << "' is not a channel: use rgb, depth and/or mask separated by commas, e.g. rgb");
+    SIM4CV_THROW_UNLESS((mask & shm::ChannelBit(channel)) == 0,
+                        flag << " is '" << text << "'; it lists " << item << " twice");
+    mask |= shm::ChannelBit(channel);
+    if (comma == std::string::npos) return mask;
+    start = comma + 1;
+  }
 }
 
 }  // namespace
@@ -82,6 +102,8 @@ Usage: sim4cvd [flags]
   --shm-camera NAME         the camera the shared-memory ring carries (default uav)
   --shm-slots N             frame slots in the shared-memory ring (default 8)
   --shm-expiry-ms N         a shared-memory client silent this long is disconnected (default 5000)
+  --shm-channels LIST       the pixel channels the shared-memory ring carries: rgb, depth and/or mask,
+                            separated by commas (default rgb,depth,mask); fewer channels, less copying
   --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --log FILE                record every frame (poses, tracker and ground-truth boxes, car controls)
                             to the run log FILE (docs/logs.md; extension .s4log by convention)
@@ -157,6 +179,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--shm-camera", [&](auto&, auto& v) { config.shm_camera = v; }},
       {"--shm-slots", [&](auto& f, auto& v) { config.shm_slots = ParseNumber<uint32_t>(f, v, 2, 1024); }},
       {"--shm-expiry-ms", [&](auto& f, auto& v) { config.shm_expiry_ms = ParseNumber<uint32_t>(f, v, 10, 3600000); }},
+      {"--shm-channels", [&](auto& f, auto& v) { config.shm_channel_mask = ParseChannelList(f, v); }},
       {"--log-level",
        [&](auto& f, auto& v) {
          SIM4CV_THROW_UNLESS(v == "debug" || v == "info" || v == "warning" || v == "error",

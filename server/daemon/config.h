@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "protocol/shm_layout.h"
 #include "server/sim/traffic/traffic_config.h"
 #include "sim4cv.pb.h"
 
@@ -43,6 +44,8 @@ struct Config {
   std::string shm_camera = "uav";
   uint32_t shm_slots = 8;
   uint32_t shm_expiry_ms = 5000;  // a silent shared-memory client is disconnected after this
+  // --shm-channels: bit (1 << proto::Channel) per pixel channel the ring carries.
+  uint32_t shm_channel_mask = shm::kShmAllPixelChannels;
   std::string log_level = "info";
   // Run logs (docs/logs.md): record every frame to log_file; replay_file makes
   // the car and the UAV follow a recorded log's poses instead of physics.

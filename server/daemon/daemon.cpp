@@ -75,6 +75,7 @@ int RunDaemon(const Config& config) {
     shm.width = camera.width;
     shm.height = camera.height;
     shm.expiry_ms = config.shm_expiry_ms;
+    shm.channel_mask = config.shm_channel_mask;
     transports.push_back(transport::MakeShmTransport(shm));
   }
 

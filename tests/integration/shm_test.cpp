@@ -1,12 +1,14 @@
 // The shared-memory transport against the real daemon: the listening line and
 // Welcome, a tracker loop over shared memory alone in lockstep mode (frames
 // through the ring, Hello/Subscribe/Step/TrackerOutput/Controls/GetState
-// through the reply ring), and frames byte-identical to the same frame over TCP.
+// through the reply ring), and frames byte-identical to the same frame over TCP,
+// also from a ring that carries RGB alone (--shm-channels rgb).
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <vector>
 
+#include "protocol/shm_sync.h"
 #include "tests/integration/shm_fixture.h"
 
 namespace sim4cv::testing {
@@ -101,53 +103,105 @@ TEST_F(ShmDaemonTest, ControlsOverSharedMemoryStopTheCar) {
   EXPECT_NEAR(state.entities(0).position().y(), frame.entities[0].position[1], 1e-9);
 }
 
-TEST_F(ShmDaemonTest, FramesAreByteIdenticalToTcpFrames) {
-  StartShmDaemon();
-  auto tcp = Connect("tcp-lockstep");
-  tcp->Subscribe("uav", kAllChannels, proto::DELIVERY_LOCKSTEP, /*with_state=*/true);
-  auto shm = OpenShm();
+// Boxes and poses of the ring's copy of a frame equal the TCP Frame's.
+void ExpectSameBoxesAndPoses(const OwnedFrame& owned, const proto::Frame& frame) {
+  ASSERT_EQ(owned.boxes.size(), static_cast<std::size_t>(frame.boxes_size()));
+  EXPECT_EQ(owned.box_total, owned.boxes.size());
+  for (int b = 0; b < frame.boxes_size(); ++b) {
+    const proto::Box& want = frame.boxes(b);
+    const ShmBox& got = owned.boxes[static_cast<std::size_t>(b)];
+    EXPECT_EQ(got.object_id, want.object_id());
+    EXPECT_EQ(got.object_class, static_cast<uint32_t>(want.object_class()));
+    EXPECT_EQ(got.x, want.x());
+    EXPECT_EQ(got.y, want.y());
+    EXPECT_EQ(got.width, want.width());
+    EXPECT_EQ(got.height, want.height());
+    EXPECT_EQ(got.visibility, want.visibility());
+    EXPECT_EQ(got.visible_pixels, want.visible_pixels());
+  }
+  ASSERT_EQ(owned.entities.size(), static_cast<std::size_t>(frame.state().entities_size()));
+  for (int e = 0; e < frame.state().entities_size(); ++e) {
+    const proto::EntityState& want = frame.state().entities(e);
+    const ShmEntityPose& got = owned.entities[static_cast<std::size_t>(e)];
+    EXPECT_EQ(got.id, want.id());
+    EXPECT_EQ(got.position[0], want.position().x());
+    EXPECT_EQ(got.orientation[0], want.orientation().w());
+    EXPECT_EQ(got.linear_velocity[1], want.linear_velocity().y());
+  }
+}
+
+// Steps a TCP lockstep client (all channels) `frames` times; for each frame,
+// `check` gets the ring's copy of the same frame id and the TCP Frame.
+template <typename Check>
+void CompareWithTcp(Client& tcp, ShmClient& shm, int frames, Check check) {
+  tcp.Subscribe("uav", kAllChannels, proto::DELIVERY_LOCKSTEP, /*with_state=*/true);
   OwnedFrame owned;
-  for (int i = 0; i < 4; ++i) {
-    const proto::Frame& frame = tcp->StepAndReceive();
+  for (int i = 0; i < frames; ++i) {
+    const proto::Frame& frame = tcp.StepAndReceive();
     // The ring has this frame, and no newer one: the sim waits for our Step.
-    ASSERT_TRUE(shm->WaitForFrame(frame.frame_id() - 1, 5000ms));
-    ASSERT_TRUE(shm->ReadNewest(owned));
+    ASSERT_TRUE(shm.WaitForFrame(frame.frame_id() - 1, 5000ms));
+    ASSERT_TRUE(shm.ReadNewest(owned));
     ASSERT_EQ(owned.frame_id, frame.frame_id());
     EXPECT_EQ(owned.sim_time, frame.sim_time());
     EXPECT_EQ(owned.render_end_mono_ns, frame.render_end_mono_ns());
     ASSERT_EQ(owned.width, frame.width());
     ASSERT_EQ(owned.height, frame.height());
     const auto rgb = FindImage(frame, proto::CHANNEL_RGB);
+    ASSERT_TRUE(rgb.has_value());
+    ASSERT_EQ(owned.rgb.size(), static_cast<std::size_t>(frame.width()) * frame.height() * 3);
+    EXPECT_EQ(std::memcmp(owned.rgb.data(), rgb->data, owned.rgb.size()), 0) << "RGB differs";
+    ExpectSameBoxesAndPoses(owned, frame);
+    check(owned, frame);
+  }
+}
+
+TEST_F(ShmDaemonTest, FramesAreByteIdenticalToTcpFrames) {
+  StartShmDaemon();
+  auto tcp = Connect("tcp-lockstep");
+  auto shm = OpenShm();
+  CompareWithTcp(*tcp, *shm, 4, [](const OwnedFrame& owned, const proto::Frame& frame) {
     const auto depth = FindImage(frame, proto::CHANNEL_DEPTH);
     const auto mask = FindImage(frame, proto::CHANNEL_MASK);
-    ASSERT_TRUE(rgb && depth && mask);
-    EXPECT_EQ(std::memcmp(owned.rgb.data(), rgb->data, owned.rgb.size()), 0) << "RGB differs";
+    ASSERT_TRUE(depth && mask && owned.has(proto::CHANNEL_DEPTH) && owned.has(proto::CHANNEL_MASK));
+    ASSERT_EQ(owned.depth.size(), owned.rgb.size() / 3);
+    ASSERT_EQ(owned.mask.size(), owned.rgb.size() / 3);
     EXPECT_EQ(std::memcmp(owned.depth.data(), depth->data, owned.depth.size() * 4), 0) << "DEPTH differs";
     EXPECT_EQ(std::memcmp(owned.mask.data(), mask->data, owned.mask.size() * 2), 0) << "MASK differs";
-    ASSERT_EQ(owned.boxes.size(), static_cast<std::size_t>(frame.boxes_size()));
-    EXPECT_EQ(owned.box_total, owned.boxes.size());
-    for (int b = 0; b < frame.boxes_size(); ++b) {
-      const proto::Box& want = frame.boxes(b);
-      const ShmBox& got = owned.boxes[static_cast<std::size_t>(b)];
-      EXPECT_EQ(got.object_id, want.object_id());
-      EXPECT_EQ(got.object_class, static_cast<uint32_t>(want.object_class()));
-      EXPECT_EQ(got.x, want.x());
-      EXPECT_EQ(got.y, want.y());
-      EXPECT_EQ(got.width, want.width());
-      EXPECT_EQ(got.height, want.height());
-      EXPECT_EQ(got.visibility, want.visibility());
-      EXPECT_EQ(got.visible_pixels, want.visible_pixels());
-    }
-    ASSERT_EQ(owned.entities.size(), static_cast<std::size_t>(frame.state().entities_size()));
-    for (int e = 0; e < frame.state().entities_size(); ++e) {
-      const proto::EntityState& want = frame.state().entities(e);
-      const ShmEntityPose& got = owned.entities[static_cast<std::size_t>(e)];
-      EXPECT_EQ(got.id, want.id());
-      EXPECT_EQ(got.position[0], want.position().x());
-      EXPECT_EQ(got.orientation[0], want.orientation().w());
-      EXPECT_EQ(got.linear_velocity[1], want.linear_velocity().y());
+  });
+}
+
+// --shm-channels rgb: the same RGB bytes as TCP sends, depth and mask absent
+// (not garbage), smaller slots, and a Subscribe asking for depth is refused.
+TEST_F(ShmDaemonTest, RgbOnlyRingCarriesTcpsRgbAndNothingElse) {
+  StartShmDaemon({"--shm-channels", "rgb"});
+  auto shm = OpenShm();
+  EXPECT_EQ(shm->header().channel_mask, 1u << proto::CHANNEL_RGB);
+  EXPECT_EQ(shm->header().slot_bytes, shm::AlignUp(shm::kShmFrameHeaderBytes + 320 * 180 * 3, 4096));
+  EXPECT_TRUE(shm->carries(proto::CHANNEL_RGB));
+  EXPECT_FALSE(shm->carries(proto::CHANNEL_DEPTH) || shm->carries(proto::CHANNEL_MASK));
+  auto tcp = Connect("tcp-lockstep");
+  CompareWithTcp(*tcp, *shm, 4, [](const OwnedFrame& owned, const proto::Frame&) {
+    EXPECT_FALSE(owned.has(proto::CHANNEL_DEPTH));
+    EXPECT_FALSE(owned.has(proto::CHANNEL_MASK));
+    EXPECT_TRUE(owned.depth.empty() && owned.mask.empty());
+  });
+  FrameView view;
+  ASSERT_TRUE(shm->AcquireNewest(view));
+  EXPECT_TRUE(view.has(proto::CHANNEL_RGB));
+  EXPECT_FALSE(view.image(proto::CHANNEL_DEPTH).has_value());
+  EXPECT_FALSE(view.image(proto::CHANNEL_MASK).has_value());
+
+  shm->Hello("rgb-only");
+  try {
+    shm->Subscribe(proto::DELIVERY_NEWEST, {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH});
+    ADD_FAILURE() << "a Subscribe for DEPTH from an RGB-only ring was accepted";
+  } catch (const ServerError& error) {
+    EXPECT_EQ(error.code(), proto::ERROR_CODE_INVALID_ARGUMENT);
+    for (const char* part : {"CHANNEL_DEPTH", "--shm-channels", "carries only rgb"}) {
+      EXPECT_NE(std::string(error.what()).find(part), std::string::npos) << error.what();
     }
   }
+  shm->Subscribe(proto::DELIVERY_NEWEST);  // asks for what the ring carries: accepted
 }
 
 TEST_F(ShmDaemonTest, ReplyRoundTripIsFast) {

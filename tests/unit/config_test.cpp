@@ -60,6 +60,7 @@ TEST(ConfigTest, Defaults) {
   EXPECT_EQ(config.shm_name, "");
   EXPECT_EQ(config.shm_camera, "uav");
   EXPECT_EQ(config.shm_slots, 8u);
+  EXPECT_EQ(config.shm_channel_mask, 0x0eu) << "RGB, depth and mask, as before the flag existed";
   EXPECT_EQ(config.log_level, "info");
   EXPECT_EQ(config.substeps_per_frame(), 8u);
 }
@@ -89,6 +90,7 @@ TEST(ConfigTest, EachFlagParses) {
   EXPECT_EQ(Parse({"--shm-name", "/already"}).shm_name, "/already");
   EXPECT_EQ(Parse({"--shm-camera", "front"}).shm_camera, "front");
   EXPECT_EQ(Parse({"--shm-slots", "2"}).shm_slots, 2u);
+  EXPECT_EQ(Parse({"--shm-channels", "rgb"}).shm_channel_mask, 1u << proto::CHANNEL_RGB);
   for (const char* level : {"debug", "info", "warning", "error"}) EXPECT_EQ(Parse({"--log-level", level}).log_level, level);
 }
 
@@ -150,7 +152,7 @@ TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
     EXPECT_FALSE(config.has_value());
     ExpectMentions(help, {"--scene", "--seed", "--bind", "--tcp-port", "--physics-hz", "--frame-hz", "--width",
                           "--height", "--mode", "--max-message-bytes", "--max-clients", "--tcp-send-buffer", "--udp-port", "--udp-datagram-bytes",
-                          "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--log-level", "--log ", "--log-label",
+                          "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--shm-channels", "--log-level", "--log ", "--log-label",
                           "--replay", "--replay-only", "--maps-dir", "--traffic-cars", "--traffic-parked",
                           "--traffic-pedestrians", "--traffic-lights", "--traffic-green", "--traffic-seed", "--help",
                           "lockstep", "realtime"});
@@ -211,6 +213,21 @@ TEST(ConfigTest, BadShmNamesAreRefused) {
   ExpectMentions(ParseError({"--shm-name", "a/b"}), {"--shm-name 'a/b'"});
   ExpectMentions(ParseError({"--shm-name", "//x"}), {"--shm-name '//x'"});
   ExpectMentions(ParseError({"--shm-name", std::string(250, 'x')}), {"--shm-name"});
+}
+
+TEST(ConfigTest, ShmChannels) {
+  EXPECT_EQ(Parse({"--shm-channels", "rgb,depth,mask"}).shm_channel_mask, 0x0eu);
+  EXPECT_EQ(Parse({"--shm-channels", "mask,rgb"}).shm_channel_mask,
+            (1u << proto::CHANNEL_RGB) | (1u << proto::CHANNEL_MASK));
+  EXPECT_EQ(Parse({"--shm-channels", "depth"}).shm_channel_mask, 1u << proto::CHANNEL_DEPTH);
+  // Each refusal names the flag, the value and what is wrong with it.
+  ExpectMentions(ParseError({"--shm-channels", "rgb,boxes"}),
+                 {"--shm-channels is 'rgb,boxes'", "'boxes' is not a channel", "rgb, depth and/or mask"});
+  ExpectMentions(ParseError({"--shm-channels", "RGB"}), {"--shm-channels is 'RGB'", "'RGB' is not a channel"});
+  ExpectMentions(ParseError({"--shm-channels", "rgb, depth"}), {"--shm-channels", "' depth' is not a channel"});
+  ExpectMentions(ParseError({"--shm-channels", ""}), {"--shm-channels is ''", "'' is not a channel"});
+  ExpectMentions(ParseError({"--shm-channels", "rgb,"}), {"--shm-channels is 'rgb,'", "'' is not a channel"});
+  ExpectMentions(ParseError({"--shm-channels", "rgb,depth,rgb"}), {"--shm-channels is 'rgb,depth,rgb'", "rgb twice"});
 }
 
 // BUG: --shm-name (server/daemon/config.cpp) accepts "/" (non-empty, no '/'

@@ -28,6 +28,7 @@ static_assert(offsetof(ShmHeader, camera_width) == 48 && offsetof(ShmHeader, wri
 static_assert(offsetof(ShmHeader, reply_offset) == 96 && offsetof(ShmHeader, reply_capacity) == 104);
 static_assert(offsetof(ShmHeader, response_offset) == 112 && offsetof(ShmHeader, response_entries) == 120);
 static_assert(offsetof(ShmHeader, expiry_ms) == 136 && offsetof(ShmHeader, protocol_version) == 140);
+static_assert(offsetof(ShmHeader, channel_mask) == 152 && kShmAllPixelChannels == 0x0e);
 static_assert(offsetof(ShmHeader, newest_frame_id) == 200 && offsetof(ShmHeader, frame_waiters) == 212);
 static_assert(offsetof(ShmHeader, reply_sleeping) == 268 && offsetof(ShmHeader, replies_dropped) == 328);
 static_assert(offsetof(ShmHeader, response_waiters) == 388);
@@ -60,6 +61,32 @@ TEST(ShmLayout, GeometryAlignsSlotsAndPlanes) {
     EXPECT_EQ(g.total_bytes, AlignUp(g.response_offset + 64 * g.response_entry_bytes, 4096));
   }
   EXPECT_EQ(ComputeGeometry(320, 180, 8, 256, 64).slot_bytes, 528384u);  // the figure docs/protocol.md quotes
+}
+
+TEST(ShmLayout, SlotsHoldOnlyTheRingsChannels) {
+  constexpr uint64_t kPixels = 320 * 180;
+  // RGB alone: the figures docs/protocol.md quotes for --shm-channels rgb.
+  const Geometry rgb = ComputeGeometry(320, 180, 8, 256, 64, ChannelBit(kShmChannelRgb));
+  EXPECT_EQ(rgb.rgb_offset, kShmFrameHeaderBytes);
+  EXPECT_EQ(rgb.depth_offset, 0u);
+  EXPECT_EQ(rgb.mask_offset, 0u);
+  EXPECT_EQ(rgb.slot_bytes, 184320u);
+  EXPECT_EQ(rgb.reply_offset, 4096u + 8 * 184320u);
+  // Present planes are packed in RGB, DEPTH, MASK order from the slot header on.
+  const Geometry depth_mask =
+      ComputeGeometry(320, 180, 8, 256, 64, ChannelBit(kShmChannelDepth) | ChannelBit(kShmChannelMask));
+  EXPECT_EQ(depth_mask.rgb_offset, 0u);
+  EXPECT_EQ(depth_mask.depth_offset, kShmFrameHeaderBytes);
+  EXPECT_EQ(depth_mask.mask_offset, AlignUp(kShmFrameHeaderBytes + kPixels * 4, kShmAlignment));
+  EXPECT_EQ(depth_mask.slot_bytes, AlignUp(depth_mask.mask_offset + kPixels * 2, 4096));
+  const Geometry odd = ComputeGeometry(17, 19, 2, 8, 1, ChannelBit(kShmChannelRgb) | ChannelBit(kShmChannelMask));
+  EXPECT_EQ(odd.mask_offset, AlignUp(kShmFrameHeaderBytes + 17 * 19 * 3, kShmAlignment));
+  EXPECT_EQ(odd.mask_offset % kShmAlignment, 0u);
+  // The default is every channel, as before the mask existed.
+  EXPECT_EQ(ComputeGeometry(320, 180, 8, 256, 64, kShmAllPixelChannels).slot_bytes,
+            ComputeGeometry(320, 180, 8, 256, 64).slot_bytes);
+  EXPECT_EQ(ChannelFlagValue(kShmAllPixelChannels), "rgb,depth,mask");
+  EXPECT_EQ(ChannelFlagValue(ChannelBit(kShmChannelMask)), "mask");
 }
 
 TEST(ShmLayout, ReplyChecksumTestVectors) {
@@ -120,6 +147,7 @@ TEST(ShmLayout, DaemonWritesTheDocumentedHeader) {
   EXPECT_EQ(h.protocol_version, 1u);
   EXPECT_EQ(h.published, 0u);
   EXPECT_EQ(h.total_bytes, region.geometry().total_bytes);
+  EXPECT_EQ(h.channel_mask, kShmAllPixelChannels);
 
   ShmClient client;
   client.Open(region.params().name.substr(1));  // the leading '/' is optional
@@ -127,6 +155,33 @@ TEST(ShmLayout, DaemonWritesTheDocumentedHeader) {
   EXPECT_EQ(client.newest_frame_id(), 0u);
   OwnedFrame frame;
   EXPECT_FALSE(client.ReadNewest(frame));
+  EXPECT_TRUE(client.carries(proto::CHANNEL_RGB) && client.carries(proto::CHANNEL_DEPTH) &&
+              client.carries(proto::CHANNEL_MASK));
+  EXPECT_FALSE(client.carries(proto::CHANNEL_BOXES)) << "boxes are not a pixel channel";
+  region.Unlink();
+}
+
+TEST(ShmLayout, RgbOnlyRingIsSmallerAndSaysWhatItCarries) {
+  auto params = Params(UniqueName("rgb-only"));
+  params.channel_mask = ChannelBit(kShmChannelRgb);
+  transport::ShmRegion region(params);
+  EXPECT_EQ(region.header().channel_mask, 0x02u);
+  EXPECT_EQ(region.header().slot_bytes, AlignUp(kShmFrameHeaderBytes + 40 * 30 * 3, 4096));
+  ShmClient client;
+  client.Open(params.name);
+  EXPECT_TRUE(client.carries(proto::CHANNEL_RGB));
+  EXPECT_FALSE(client.carries(proto::CHANNEL_DEPTH));
+  EXPECT_FALSE(client.carries(proto::CHANNEL_MASK));
+  region.Unlink();
+}
+
+TEST(ShmLayout, ObjectWithoutAChannelMaskCarriesEveryChannel) {
+  // Daemons that predate --shm-channels left the field zero.
+  transport::ShmRegion region(Params(UniqueName("no-mask")));
+  region.header().channel_mask = 0;
+  ShmClient client;
+  client.Open(region.params().name);
+  EXPECT_TRUE(client.carries(proto::CHANNEL_DEPTH));
   region.Unlink();
 }
 
@@ -146,6 +201,13 @@ TEST(ShmLayout, WrongLayoutVersionIsAClearError) {
   transport::ShmRegion region(Params(UniqueName("version")));
   region.header().layout_version = 99;
   ExpectOpenFails(region.params().name, {"layout version 99", "layout version 1", region.params().name});
+  region.Unlink();
+}
+
+TEST(ShmLayout, UnknownChannelBitsAreAClearError) {
+  transport::ShmRegion region(Params(UniqueName("bad-mask")));
+  region.header().channel_mask = 0x1e;  // BOXES is no pixel channel
+  ExpectOpenFails(region.params().name, {"channel mask 30", "RGB, DEPTH and MASK"});
   region.Unlink();
 }
 
@@ -207,6 +269,16 @@ TEST(ShmLayout, BadParametersAreNamed) {
     ADD_FAILURE() << "one slot accepted";
   } catch (const std::invalid_argument& error) {
     EXPECT_NE(std::string(error.what()).find("--shm-slots 1"), std::string::npos) << error.what();
+  }
+  for (const uint32_t mask : {0u, 0x10u, 0x0fu}) {
+    params = Params(UniqueName("channels"));
+    params.channel_mask = mask;
+    try {
+      transport::ShmRegion region(params);
+      ADD_FAILURE() << "channel mask " << mask << " accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("--shm-channels"), std::string::npos) << error.what();
+    }
   }
 }
 

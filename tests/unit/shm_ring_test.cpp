@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <thread>
@@ -176,6 +177,84 @@ TEST(ShmRing, UnreleasedViewGoesStaleWithoutBlockingTheWriter) {
   view.Release();
   EXPECT_FALSE(view.valid());
   EXPECT_TRUE(view.stale());
+}
+
+// A ring carrying some channels: those come through intact, the others are
+// reported absent by every accessor and their records hold zeros, not garbage.
+TEST(ShmRing, RingWithoutSomeChannelsReportsThemAbsent) {
+  auto params = Params("channels", 2);
+  params.channel_mask = shm::ChannelBit(shm::kShmChannelRgb);
+  auto region = std::make_shared<ShmRegion>(params);
+  const Unlinker cleanup{region->params().name};
+  ShmRingWriter writer(region, 0);
+  ShmClient client;
+  client.Open(region->params().name);
+  OwnedFrame owned;
+  session::Frame frame;
+  // A reused OwnedFrame: its depth and mask must not keep an earlier frame's pixels.
+  owned.depth.assign(4, 1.0f);
+  owned.mask.assign(4, 1);
+  FillFrame(frame, 3);
+  writer.Write(frame);
+  ASSERT_TRUE(client.ReadNewest(owned));
+  EXPECT_EQ(owned.rgb, frame.rgb);
+  EXPECT_TRUE(owned.has(proto::CHANNEL_RGB));
+  EXPECT_FALSE(owned.has(proto::CHANNEL_DEPTH));
+  EXPECT_FALSE(owned.has(proto::CHANNEL_MASK));
+  EXPECT_TRUE(owned.depth.empty() && owned.mask.empty());
+  EXPECT_EQ(owned.boxes.size(), 3u) << "boxes and poses come with any channel set";
+  EXPECT_EQ(owned.entities.size(), 1u);
+
+  FrameView view;
+  ASSERT_TRUE(client.AcquireNewest(view));
+  EXPECT_TRUE(view.has(proto::CHANNEL_RGB));
+  EXPECT_FALSE(view.has(proto::CHANNEL_DEPTH));
+  EXPECT_FALSE(view.has(proto::CHANNEL_MASK));
+  EXPECT_FALSE(view.has(proto::CHANNEL_UNSPECIFIED));
+  EXPECT_FALSE(view.image(proto::CHANNEL_DEPTH).has_value());
+  EXPECT_FALSE(view.image(proto::CHANNEL_MASK).has_value());
+  EXPECT_FALSE(view.image(proto::CHANNEL_UNSPECIFIED).has_value())
+      << "channel 0 must not match an absent channel's all-zero record";
+  const auto rgb = view.image(proto::CHANNEL_RGB);
+  ASSERT_TRUE(rgb.has_value());
+  EXPECT_EQ(std::memcmp(rgb->data, frame.rgb.data(), frame.rgb.size()), 0);
+  const shm::ShmFrameHeader& slot = region->map().slot(0);
+  EXPECT_EQ(slot.channel_mask, 0x02u);
+  EXPECT_EQ(slot.channel_count, 3u);
+  for (int absent : {1, 2}) {
+    const shm::ShmChannel& record = slot.channels[absent];
+    EXPECT_TRUE(record.channel == 0 && record.format == 0 && record.stride == 0 && record.offset == 0 &&
+                record.bytes == 0)
+        << "record " << absent;
+  }
+  EXPECT_FALSE(view.stale());
+}
+
+TEST(ShmRing, RingWithoutRgbPacksTheOtherPlanes) {
+  auto params = Params("no-rgb", 2);
+  params.channel_mask = shm::ChannelBit(shm::kShmChannelDepth) | shm::ChannelBit(shm::kShmChannelMask);
+  auto region = std::make_shared<ShmRegion>(params);
+  const Unlinker cleanup{region->params().name};
+  ShmRingWriter writer(region, 0);
+  ShmClient client;
+  client.Open(region->params().name);
+  session::Frame frame;
+  FillFrame(frame, 8);
+  writer.Write(frame);
+  OwnedFrame owned;
+  ASSERT_TRUE(client.ReadNewest(owned));
+  EXPECT_TRUE(owned.rgb.empty());
+  EXPECT_EQ(owned.depth, frame.depth);
+  EXPECT_EQ(owned.mask, frame.mask);
+  FrameView view;
+  ASSERT_TRUE(client.AcquireNewest(view));
+  EXPECT_FALSE(view.image(proto::CHANNEL_RGB).has_value());
+  const auto depth = view.image(proto::CHANNEL_DEPTH);
+  ASSERT_TRUE(depth.has_value());
+  // Slot 0, right after its header: where RGB would have been.
+  const auto* client_base = reinterpret_cast<const uint8_t*>(&client.header());
+  EXPECT_EQ(depth->data, client_base + client.header().slots_offset + shm::kShmFrameHeaderBytes);
+  EXPECT_EQ(depth->stride, kWidth * 4);
 }
 
 TEST(ShmRing, IgnoresFramesOfOtherCameras) {

@@ -31,6 +31,10 @@ void CheckParams(const ShmRegionParams& p) {
                                 " slots) and response area (" + std::to_string(p.response_entries) +
                                 " entries) need at least one each");
   }
+  if (p.channel_mask == 0 || (p.channel_mask & ~shm::kShmAllPixelChannels) != 0) {
+    throw std::invalid_argument("--shm-channels must name one or more of rgb, depth and mask (channel mask " +
+                                std::to_string(p.channel_mask) + ")");
+  }
   if (p.width == 0 || p.height == 0)
     throw std::invalid_argument("shared-memory ring for camera '" + p.camera_name + "' has size 0");
   if (p.camera_name.size() >= sizeof(shm::ShmHeader::camera_name)) {
@@ -44,7 +48,7 @@ void CheckParams(const ShmRegionParams& p) {
 ShmRegion::ShmRegion(const ShmRegionParams& params) : params_(params) {
   CheckParams(params_);
   geometry_ = shm::ComputeGeometry(params_.width, params_.height, params_.slot_count, params_.reply_capacity,
-                                   params_.response_entries);
+                                   params_.response_entries, params_.channel_mask);
   const char* name = params_.name.c_str();
   // A daemon that crashed left its object behind: replace it.
   if (shm_unlink(name) == 0) {
@@ -103,6 +107,7 @@ ShmRegion::ShmRegion(const ShmRegionParams& params) : params_(params) {
   h.expiry_ms = params_.expiry_ms;
   h.protocol_version = wire::kProtocolVersion;
   h.response_entry_bytes = geometry_.response_entry_bytes;
+  h.channel_mask = params_.channel_mask;
   // The magic goes last: a reader that sees it sees a complete header.
   std::atomic_thread_fence(std::memory_order_release);
   std::memcpy(h.magic, SIM4CV_SHM_MAGIC, sizeof h.magic);

@@ -21,6 +21,8 @@ struct ShmRegionParams {
   uint32_t reply_capacity = 256;
   uint32_t response_entries = 64;
   uint32_t expiry_ms = 5000;
+  // Bit (1 << proto::Channel) per pixel channel the slots carry (--shm-channels).
+  uint32_t channel_mask = shm::kShmAllPixelChannels;
 };
 
 class ShmRegion {

@@ -1,18 +1,42 @@
 #include "server/transport/shm/shm_ring_writer.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 namespace sim4cv::transport {
 namespace {
 
-void SetChannel(shm::ShmChannel& out, proto::Channel channel, proto::PixelFormat format, uint32_t bytes_per_pixel,
-                uint32_t width, uint32_t height, uint64_t offset) {
-  out.channel = channel;
-  out.format = format;
-  out.bytes_per_pixel = bytes_per_pixel;
-  out.stride = width * bytes_per_pixel;
-  out.offset = offset;
+// One pixel plane of a frame as the ring stores it: where it comes from and
+// where it goes in a slot (offset 0: the ring does not carry the channel).
+struct Plane {
+  proto::Channel channel;
+  proto::PixelFormat format;
+  uint32_t bytes_per_pixel;
+  const void* data;
+  std::size_t available_bytes;  // in the frame's buffer
+  uint64_t offset;              // in the slot
+};
+
+// The frame's planes in channel-record order (RGB, DEPTH, MASK).
+std::array<Plane, 3> Planes(const session::Frame& f, const shm::Geometry& g) {
+  return {{{proto::CHANNEL_RGB, proto::PIXEL_FORMAT_RGB8, 3, f.rgb.data(), f.rgb.size(), g.rgb_offset},
+           {proto::CHANNEL_DEPTH, proto::PIXEL_FORMAT_DEPTH_F32, 4, f.depth.data(), f.depth.size() * sizeof(float),
+            g.depth_offset},
+           {proto::CHANNEL_MASK, proto::PIXEL_FORMAT_INSTANCE_U16, 2, f.mask.data(), f.mask.size() * sizeof(uint16_t),
+            g.mask_offset}}};
+}
+
+// The record of a plane the ring carries; one it does not carry stays all
+// zero (docs/protocol.md 13.2), so no reader can follow it anywhere.
+void SetChannel(shm::ShmChannel& out, const Plane& plane, uint32_t width, uint32_t height) {
+  out = {};
+  if (plane.offset == 0) return;
+  out.channel = plane.channel;
+  out.format = plane.format;
+  out.bytes_per_pixel = plane.bytes_per_pixel;
+  out.stride = width * plane.bytes_per_pixel;
+  out.offset = plane.offset;
   out.bytes = static_cast<uint64_t>(out.stride) * height;
 }
 
@@ -51,9 +75,10 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   const ShmRegion& region = *region_;
   const ShmRegionParams& params = region.params();
   const std::size_t pixels = static_cast<std::size_t>(params.width) * params.height;
-  if (frame.camera_index != camera_index_ || frame.width != params.width || frame.height != params.height ||
-      frame.rgb.size() < pixels * 3 || frame.depth.size() < pixels || frame.mask.size() < pixels) {
-    return;
+  if (frame.camera_index != camera_index_ || frame.width != params.width || frame.height != params.height) return;
+  const std::array<Plane, 3> planes = Planes(frame, region.geometry());
+  for (const Plane& plane : planes) {
+    if (plane.offset != 0 && plane.available_bytes < pixels * plane.bytes_per_pixel) return;
   }
   const shm::Mapped& map = region.map();
   shm::ShmHeader& header = map.header();
@@ -75,17 +100,14 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   h.width = frame.width;
   h.height = frame.height;
   h.camera_index = frame.camera_index;
-  const shm::Geometry& g = region.geometry();
-  SetChannel(h.channels[0], proto::CHANNEL_RGB, proto::PIXEL_FORMAT_RGB8, 3, frame.width, frame.height, g.rgb_offset);
-  SetChannel(h.channels[1], proto::CHANNEL_DEPTH, proto::PIXEL_FORMAT_DEPTH_F32, 4, frame.width, frame.height,
-             g.depth_offset);
-  SetChannel(h.channels[2], proto::CHANNEL_MASK, proto::PIXEL_FORMAT_INSTANCE_U16, 2, frame.width, frame.height,
-             g.mask_offset);
-  h.channel_count = 3;
-  h.channel_mask = (1u << proto::CHANNEL_RGB) | (1u << proto::CHANNEL_DEPTH) | (1u << proto::CHANNEL_MASK);
-  std::memcpy(slot + g.rgb_offset, frame.rgb.data(), h.channels[0].bytes);
-  std::memcpy(slot + g.depth_offset, frame.depth.data(), h.channels[1].bytes);
-  std::memcpy(slot + g.mask_offset, frame.mask.data(), h.channels[2].bytes);
+  h.channel_count = static_cast<uint32_t>(planes.size());
+  h.channel_mask = params.channel_mask;
+  // Only the channels the ring carries are copied: this memcpy is most of the
+  // ring's latency, and a tracker that reads RGB alone needs a third of it.
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    SetChannel(h.channels[i], planes[i], frame.width, frame.height);
+    if (planes[i].offset != 0) std::memcpy(slot + planes[i].offset, planes[i].data, h.channels[i].bytes);
+  }
 
   const std::size_t boxes = std::min<std::size_t>(frame.boxes.size(), shm::kShmMaxBoxes);
   for (std::size_t i = 0; i < boxes; ++i) {

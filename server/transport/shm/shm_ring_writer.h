@@ -1,7 +1,8 @@
 // The frame ring's single writer: a ClientLink subscribed (newest-frame) to
-// the ring's camera, so the sim thread hands it every frame it renders. Each
-// frame is copied once into the next slot under that slot's seqlock; the
-// writer never waits for readers and overwrites the oldest slot.
+// the ring's camera, so the sim thread hands it every frame it renders. The
+// pixel channels the ring carries (--shm-channels) are copied once into the
+// next slot under that slot's seqlock; the writer never waits for readers and
+// overwrites the oldest slot.
 #pragma once
 
 #include <memory>

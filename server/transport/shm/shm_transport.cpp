@@ -12,6 +12,7 @@
 #include <map>
 #include <thread>
 
+#include "protocol/shm_sync.h"
 #include "server/common/log.h"
 #include "server/session/client_protocol.h"
 #include "server/transport/shm/shm_client_link.h"
@@ -37,7 +38,8 @@ struct ShmSession {
 };
 
 ShmRegionParams RegionParams(const ShmOptions& o) {
-  return {o.name, o.camera, o.width, o.height, o.slot_count, o.reply_slot_count, o.max_clients, o.expiry_ms};
+  return {o.name,        o.camera,    o.width,       o.height, o.slot_count, o.reply_slot_count,
+          o.max_clients, o.expiry_ms, o.channel_mask};
 }
 
 class ShmTransport : public Transport {
@@ -145,19 +147,16 @@ class ShmTransport : public Transport {
     for (uint64_t n = 0; n < delivered; ++n) s.protocol->OnFrameSent();
 
     Outcome outcome;
-    if (!request_.ParseFromArray(message.data, static_cast<int>(message.size))) {
+    const bool parsed = request_.ParseFromArray(message.data, static_cast<int>(message.size));
+    const std::string refusal =
+        parsed && s.welcomed && request_.has_subscribe() ? RingRefusal(request_.subscribe()) : std::string();
+    if (!parsed) {
       outcome = session::ClientProtocol::Refuse(
           proto::ERROR_CODE_MALFORMED_MESSAGE,
           "the " + std::to_string(message.size) + " bytes of a shared-memory reply slot are not a valid Envelope", true,
           reply_);
-    } else if (s.welcomed && request_.has_subscribe() && request_.subscribe().camera() != options_.camera &&
-               context_->world.HasCamera(request_.subscribe().camera())) {
-      outcome = session::ClientProtocol::Refuse(
-          proto::ERROR_CODE_INVALID_ARGUMENT,
-          "Subscribe.camera is '" + request_.subscribe().camera() + "' but the shared-memory ring " + options_.name +
-              " carries camera '" + options_.camera + "' (daemon flag --shm-camera); subscribe to '" + options_.camera +
-              "' here, or use TCP for other cameras",
-          false, reply_);
+    } else if (!refusal.empty()) {
+      outcome = session::ClientProtocol::Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, refusal, false, reply_);
     } else {
       outcome = s.protocol->Handle(request_, reply_);
       if (reply_.has_welcome()) s.welcomed = true;
@@ -165,6 +164,28 @@ class ShmTransport : public Transport {
     if (outcome == Outcome::kNoReply) return;
     s.link->Reply(reply_);
     if (outcome == Outcome::kReplyAndClose) EndSession(s, reply_.error().message());
+  }
+
+  // Why the ring cannot serve `subscribe` (empty if it can): frames of one
+  // camera, with only the channels of --shm-channels. Other problems (an
+  // unknown camera, bad channel numbers) are ClientProtocol's to answer as over TCP.
+  std::string RingRefusal(const proto::Subscribe& subscribe) const {
+    if (subscribe.camera() != options_.camera) {
+      if (!context_->world.HasCamera(subscribe.camera())) return "";  // ClientProtocol's UNKNOWN_CAMERA
+      return "Subscribe.camera is '" + subscribe.camera() + "' but the shared-memory ring " + options_.name +
+             " carries camera '" + options_.camera + "' (daemon flag --shm-camera); subscribe to '" + options_.camera +
+             "' here, or use TCP for other cameras";
+    }
+    for (const int channel : subscribe.channels()) {
+      const bool pixels = channel >= proto::CHANNEL_RGB && channel <= proto::CHANNEL_MASK;
+      if (!pixels || (options_.channel_mask & shm::ChannelBit(static_cast<uint32_t>(channel))) != 0) continue;
+      return "Subscribe.channels asks for " + proto::Channel_Name(channel) + " but the shared-memory ring " +
+             options_.name + " carries only " + shm::ChannelFlagValue(options_.channel_mask) +
+             " (daemon flag --shm-channels); leave " + proto::Channel_Name(channel) +
+             " out, subscribe to it over TCP, or start sim4cvd with --shm-channels including " +
+             shm::ChannelFlagName(static_cast<uint32_t>(channel));
+    }
+    return "";
   }
 
   // After a fatal Error (from ClientProtocol or the sim thread): the client's

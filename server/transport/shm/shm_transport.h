@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "protocol/shm_layout.h"
 #include "server/transport/transport.h"
 
 namespace sim4cv::transport {
@@ -20,6 +21,9 @@ struct ShmOptions {
   uint32_t expiry_ms = 5000;        // a client that sends nothing this long is disconnected
   uint32_t max_clients = 64;        // response-area entries: shared-memory clients at once
   uint32_t reply_spin_us = 0;       // how long the reply thread polls before it sleeps in FUTEX_WAIT
+  // Bit (1 << proto::Channel) per pixel channel the slots carry (--shm-channels): a
+  // ring without the channels its readers skip copies and holds less per frame.
+  uint32_t channel_mask = shm::kShmAllPixelChannels;
 };
 
 // Creates (replacing a stale one) and maps the object at once; serves after

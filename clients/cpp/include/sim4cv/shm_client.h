@@ -15,6 +15,7 @@
 //     sim4cv::FrameView view;
 //     shm.AcquireNewest(view);           // zero-copy: pointers into the ring
 //     ... use view.image(CHANNEL_RGB), view.boxes() ...
+//     (a ring started with --shm-channels carries only those: view.has(c))
 //     if (view.stale()) { /* the daemon overwrote it meanwhile: discard */ }
 //     last = view.frame_id();
 //     shm.SendTrackerOutput(last, x, y, w, h, confidence);
@@ -61,7 +62,10 @@ class FrameView {
   uint32_t height() const { return header_.height; }
   // The ring publication this frame was written as (consecutive frames: +1).
   uint64_t publication() const { return header_.publication; }
-  // RGB, DEPTH or MASK pixels in place; nullopt for other channels.
+  // True if the frame holds this pixel channel (RGB, DEPTH, MASK): the ring
+  // carries only the channels of the daemon's --shm-channels.
+  bool has(proto::Channel channel) const;
+  // RGB, DEPTH or MASK pixels in place; nullopt if !has(channel).
   std::optional<ImageView> image(proto::Channel channel) const;
   std::span<const ShmBox> boxes() const { return {header_.boxes, header_.box_count}; }
   // Visible labelled objects; more than boxes().size() if the slot's box array was full.
@@ -89,9 +93,13 @@ struct OwnedFrame {
   double sim_time = 0;
   int64_t render_end_mono_ns = 0;
   uint32_t width = 0, height = 0;
+  // The pixel channels the ring carries (bit 1 << proto::Channel); the
+  // vector of a channel it does not carry is empty.
+  uint32_t channel_mask = 0;
   std::vector<uint8_t> rgb;    // height * width * 3
   std::vector<float> depth;    // height * width
   std::vector<uint16_t> mask;  // height * width
+  bool has(proto::Channel channel) const;
   std::vector<ShmBox> boxes;
   uint32_t box_total = 0;
   std::vector<ShmEntityPose> entities;
@@ -115,6 +123,8 @@ class ShmClient {
   const shm::ShmHeader& header() const { return *reinterpret_cast<const shm::ShmHeader*>(base_); }
   std::string camera() const;
   uint64_t token() const { return token_; }
+  // Whether the ring's frames hold this pixel channel (the daemon's --shm-channels).
+  bool carries(proto::Channel channel) const;
 
   // Frames. Newest published frame id (0: none yet).
   uint64_t newest_frame_id() const;
@@ -140,8 +150,13 @@ class ShmClient {
   // SendControls do not wait (a refusal arrives later, see ReceiveReply).
   proto::Welcome Hello(const std::string& client_name = "cpp-shm-client", Duration timeout = Duration(5000),
                        uint32_t protocol_version = 0 /* 0: this build's */);
-  // Subscribes to the ring's camera (frames stay in the ring).
+  // Subscribes to the ring's camera (frames stay in the ring), with the
+  // channels the ring carries and BOXES.
   void Subscribe(proto::Delivery delivery, Duration timeout = Duration(5000));
+  // The same with these channels; one the ring does not carry gets a
+  // ServerError (INVALID_ARGUMENT) naming it and --shm-channels.
+  void Subscribe(proto::Delivery delivery, const std::vector<proto::Channel>& channels,
+                 Duration timeout = Duration(5000));
   void Step();
   void SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence);
   void SendControls(uint32_t entity_id, float steering, float throttle, float brake);

@@ -36,6 +36,17 @@ std::string Printable(const char* bytes, std::size_t size) {
   return out;
 }
 
+// The pixel channels a ring carries. Daemons that predate --shm-channels left
+// the header's mask 0 and always carried all three.
+uint32_t RingChannels(const shm::ShmHeader& h) {
+  return h.channel_mask == 0 ? shm::kShmAllPixelChannels : h.channel_mask;
+}
+
+bool InMask(uint32_t mask, proto::Channel channel) {
+  return channel >= proto::CHANNEL_RGB && channel <= proto::CHANNEL_MASK &&
+         (mask & shm::ChannelBit(static_cast<uint32_t>(channel))) != 0;
+}
+
 // Every offset the client will follow must stay inside the mapping.
 void CheckGeometry(const shm::ShmHeader& h, std::size_t mapped, const std::string& name) {
   auto fail = [&](const std::string& what) {
@@ -49,11 +60,14 @@ void CheckGeometry(const shm::ShmHeader& h, std::size_t mapped, const std::strin
   if (h.camera_width == 0 || h.camera_height == 0 || h.camera_width > 65536 || h.camera_height > 65536) {
     fail("camera size " + std::to_string(h.camera_width) + "x" + std::to_string(h.camera_height) + " is out of range");
   }
+  if ((h.channel_mask & ~shm::kShmAllPixelChannels) != 0) {
+    fail("its channel mask " + std::to_string(h.channel_mask) + " names channels other than RGB, DEPTH and MASK");
+  }
   if (h.total_bytes > mapped) {
     fail("it claims " + std::to_string(h.total_bytes) + " bytes but the object has " + std::to_string(mapped));
   }
-  const shm::Geometry g =
-      shm::ComputeGeometry(h.camera_width, h.camera_height, h.slot_count, h.reply_capacity, h.response_entries);
+  const shm::Geometry g = shm::ComputeGeometry(h.camera_width, h.camera_height, h.slot_count, h.reply_capacity,
+                                               h.response_entries, RingChannels(h));
   if (h.slot_count < 2 || h.reply_capacity == 0 || h.slot_bytes < g.slot_bytes || h.slots_offset < h.header_bytes ||
       h.slots_offset + h.slot_bytes * h.slot_count > h.total_bytes ||
       h.reply_offset + static_cast<uint64_t>(h.reply_capacity) * h.reply_slot_bytes > h.total_bytes ||
@@ -63,16 +77,35 @@ void CheckGeometry(const shm::ShmHeader& h, std::size_t mapped, const std::strin
   }
 }
 
+// Copies channel record `index` (0 RGB, 1 DEPTH, 2 MASK) of `meta`, `count`
+// values, into `out`; empties `out` if the frame lacks the channel. False if
+// the record does not fit in the slot (sizes come from a possibly torn header).
 template <typename T>
-void CopyPlane(std::vector<T>& out, const uint8_t* slot, const shm::ShmChannel& channel, std::size_t pixels) {
-  out.resize(pixels);
-  std::memcpy(out.data(), slot + channel.offset, std::min<uint64_t>(channel.bytes, pixels * sizeof(T)));
+bool CopyPlane(std::vector<T>& out, const uint8_t* slot, uint64_t slot_bytes, const shm::ShmFrameHeader& meta,
+               uint32_t index, std::size_t count) {
+  const uint32_t channel = index + 1;
+  if ((meta.channel_mask & shm::ChannelBit(channel)) == 0) {
+    out.clear();  // keeps the capacity: a reused OwnedFrame allocates nothing
+    return true;
+  }
+  const shm::ShmChannel& record = meta.channels[index];
+  const uint64_t bytes = count * sizeof(T);
+  if (record.channel != channel || record.offset < shm::kShmFrameHeaderBytes || record.offset + bytes > slot_bytes) {
+    return false;
+  }
+  out.resize(count);
+  std::memcpy(out.data(), slot + record.offset, std::min<uint64_t>(record.bytes, bytes));
+  return true;
 }
 
 }  // namespace
 
+bool FrameView::has(proto::Channel channel) const { return slot_ && InMask(header_.channel_mask, channel); }
+
+bool OwnedFrame::has(proto::Channel channel) const { return InMask(channel_mask, channel); }
+
 std::optional<ImageView> FrameView::image(proto::Channel channel) const {
-  if (!slot_) return std::nullopt;
+  if (!has(channel)) return std::nullopt;  // an absent channel's record is zero: nothing to point at
   for (uint32_t i = 0; i < std::min(header_.channel_count, shm::kShmMaxChannels); ++i) {
     const shm::ShmChannel& c = header_.channels[i];
     if (c.channel != static_cast<uint32_t>(channel)) continue;
@@ -161,6 +194,11 @@ void ShmClient::Close() {
   pending_.clear();
 }
 
+bool ShmClient::carries(proto::Channel channel) const {
+  RequireOpen();
+  return InMask(RingChannels(header()), channel);
+}
+
 std::string ShmClient::camera() const {
   RequireOpen();
   const auto& name = header().camera_name;
@@ -222,14 +260,9 @@ bool ShmClient::CopyNewest(OwnedFrame& out) const {
     // Sizes come from a possibly torn header: bound them by the slot before copying.
     const std::size_t pixels =
         static_cast<std::size_t>(std::min(meta.width, h.camera_width)) * std::min(meta.height, h.camera_height);
-    const bool sane = meta.channel_count == 3 && meta.channels[0].offset + pixels * 3 <= h.slot_bytes &&
-                      meta.channels[1].offset + pixels * 4 <= h.slot_bytes &&
-                      meta.channels[2].offset + pixels * 2 <= h.slot_bytes;
-    if (sane) {
-      CopyPlane(out.rgb, slot, meta.channels[0], pixels * 3);
-      CopyPlane(out.depth, slot, meta.channels[1], pixels);
-      CopyPlane(out.mask, slot, meta.channels[2], pixels);
-    }
+    const bool sane = meta.channel_count == 3 && CopyPlane(out.rgb, slot, h.slot_bytes, meta, 0, pixels * 3) &&
+                      CopyPlane(out.depth, slot, h.slot_bytes, meta, 1, pixels) &&
+                      CopyPlane(out.mask, slot, h.slot_bytes, meta, 2, pixels);
     std::atomic_thread_fence(std::memory_order_acquire);
     if (shm::Atomic(frame.sequence).load(std::memory_order_relaxed) != before) continue;
     if (!sane)
@@ -240,6 +273,7 @@ bool ShmClient::CopyNewest(OwnedFrame& out) const {
     out.render_end_mono_ns = meta.render_end_mono_ns;
     out.width = meta.width;
     out.height = meta.height;
+    out.channel_mask = meta.channel_mask;
     out.boxes.assign(meta.boxes, meta.boxes + std::min(meta.box_count, shm::kShmMaxBoxes));
     out.box_total = meta.box_total;
     out.entities.assign(meta.entities, meta.entities + std::min(meta.entity_count, shm::kShmMaxEntities));

@@ -201,10 +201,18 @@ proto::Welcome ShmClient::Hello(const std::string& client_name, Duration timeout
 }
 
 void ShmClient::Subscribe(proto::Delivery delivery, Duration timeout) {
+  // Whatever the ring carries: asking for more would be refused.
+  std::vector<proto::Channel> channels;
+  for (const auto channel : {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK}) {
+    if (carries(channel)) channels.push_back(channel);
+  }
+  channels.push_back(proto::CHANNEL_BOXES);
+  Subscribe(delivery, channels, timeout);
+}
+
+void ShmClient::Subscribe(proto::Delivery delivery, const std::vector<proto::Channel>& channels, Duration timeout) {
   const Deadline deadline = std::chrono::steady_clock::now() + timeout;
-  // The ring carries every channel, so the subscription asks for all of them.
-  const Envelope request = detail::SubscribeRequest(
-      camera(), {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_BOXES}, delivery, false);
+  const Envelope request = detail::SubscribeRequest(camera(), channels, delivery, false);
   SendEnvelope(request);
   Envelope reply;
   if (!ReceiveKind(Envelope::kSubscribed, reply, deadline)) {
