@@ -11,6 +11,7 @@
 #include "server/render/projection.h"
 #include "server/render/renderer.h"
 #include "server/render/scene_graphics.h"
+#include "server/session/client_protocol.h"
 
 namespace sim4cv::daemon {
 namespace {
@@ -19,6 +20,15 @@ int64_t MonotonicNanoseconds() {
   timespec now{};
   clock_gettime(CLOCK_MONOTONIC, &now);
   return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
+// Answers a client the sim thread refuses something to (nothing if it has
+// no link), phrased as every other non-fatal Error.
+void OfferError(session::ClientLink* link, proto::ErrorCode code, const std::string& message) {
+  if (!link) return;
+  proto::Envelope reply;
+  session::ClientProtocol::Refuse(code, message, false, reply);
+  link->OfferReply(std::move(reply));
 }
 
 template <typename... Handlers>
@@ -179,12 +189,9 @@ void SimThread::Subscribe(session::ClientId client, session::SubscribeCommand& s
   }
   // The camera went (RemoveCamera, Remove, Reset, LoadMap) between the
   // network thread's check and now.
-  if (!subscribe.link) return;
-  proto::Envelope reply;
-  reply.mutable_error()->set_code(proto::ERROR_CODE_UNKNOWN_CAMERA);
-  reply.mutable_error()->set_message("the camera you subscribed to was removed before the subscription took effect; "
-                                     "subscribe to a camera the world has (GetWorld lists them)");
-  subscribe.link->OfferReply(std::move(reply));
+  OfferError(subscribe.link.get(), proto::ERROR_CODE_UNKNOWN_CAMERA,
+             "the camera you subscribed to was removed before the subscription took effect; "
+             "subscribe to a camera the world has (GetWorld lists them)");
 }
 
 void SimThread::ApplyControls(session::ControlsCommand& controls) {
@@ -193,13 +200,9 @@ void SimThread::ApplyControls(session::ControlsCommand& controls) {
     car->car_command = {controls.steering, controls.throttle, controls.brake, true};
     return;
   }
-  if (!controls.link) return;
-  proto::Envelope reply;
-  proto::Error& error = *reply.mutable_error();
-  error.set_code(proto::ERROR_CODE_UNKNOWN_ENTITY);
-  error.set_message("Controls.entity_id " + std::to_string(controls.entity_id) + " is not a car; the world holds " +
-                    sim::AgentList(sim_.state()));
-  controls.link->OfferReply(std::move(reply));
+  OfferError(controls.link.get(), proto::ERROR_CODE_UNKNOWN_ENTITY,
+             "Controls.entity_id " + std::to_string(controls.entity_id) + " is not a car; the world holds " +
+                 sim::AgentList(sim_.state()));
 }
 
 void SimThread::Configure(session::ConfigureCommand& command) {
@@ -207,11 +210,8 @@ void SimThread::Configure(session::ConfigureCommand& command) {
   try {
     AfterChange(sim_.Apply(command.request, *reply.mutable_configured()));
   } catch (const ConfigureError& refused) {
-    reply.Clear();
-    proto::Error& error = *reply.mutable_error();
-    error.set_code(refused.code());
-    error.set_message(refused.what());
-    error.set_request_id(command.request.request_id());
+    session::ClientProtocol::Refuse(refused.code(), refused.what(), false, reply);
+    reply.mutable_error()->set_request_id(command.request.request_id());
     LOG_INFO("Configure " << command.request.request_id() << " refused: " << refused.what());
   }
   if (command.link) command.link->OfferReply(std::move(reply));
@@ -219,12 +219,7 @@ void SimThread::Configure(session::ConfigureCommand& command) {
 
 void SimThread::AfterChange(const Simulation::Change& change) {
   const auto tell = [](const std::vector<std::shared_ptr<session::ClientLink>>& links, const std::string& message) {
-    for (const auto& link : links) {
-      proto::Envelope reply;
-      reply.mutable_error()->set_code(proto::ERROR_CODE_UNKNOWN_CAMERA);
-      reply.mutable_error()->set_message(message);
-      link->OfferReply(std::move(reply));
-    }
+    for (const auto& link : links) OfferError(link.get(), proto::ERROR_CODE_UNKNOWN_CAMERA, message);
   };
   if (change.new_scene) {
     const auto scene_cameras = static_cast<uint32_t>(sim_.scene().cameras.size());

@@ -47,6 +47,14 @@ const char* KindName(AgentKind kind) {
   return "?";
 }
 
+// The set speed a car (at most 40 m/s) or a pedestrian (10 m/s) may be given.
+void CheckSpeed(AgentKind kind, float speed) {
+  const bool walking = kind == AgentKind::kPedestrian;
+  const float most = walking ? 10.0f : 40.0f;
+  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= most,
+                      (walking ? "walking" : "car") << " speed " << speed << " m/s is outside [0, " << most << "]");
+}
+
 // A pedestrian's pose and velocity `walked` metres along its route.
 void PlaceWalker(const vehicles::Polyline& route, double walked, double speed, BodyState& body) {
   const double step = 0.05;  // m: the heading from a short chord, defined at any point
@@ -241,8 +249,7 @@ void World::SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> pat
   const Agent* found = state.Find(id);
   if (found && found->kind == AgentKind::kPedestrian) return SetWalk(state, id, std::move(path), closed, speed);
   Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetRoute");
-  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40,
-                      "route speed " << speed << " m/s is outside [0, 40]");
+  CheckSpeed(AgentKind::kCar, speed);
   SIM4CV_THROW_UNLESS(path.size() >= 2, "a route needs at least 2 points; got " << path.size());
   vehicle.driver =
       std::make_unique<vehicles::CarDriver>(scene_.car.params, vehicles::Polyline(std::move(path), closed), speed);
@@ -253,8 +260,7 @@ void World::SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> pat
 
 void World::SetWalk(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed) {
   Vehicle& vehicle = VehicleOf(state, id, AgentKind::kPedestrian, "SetRoute");
-  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 10,
-                      "walking speed " << speed << " m/s is outside [0, 10]");
+  CheckSpeed(AgentKind::kPedestrian, speed);
   SIM4CV_THROW_UNLESS(path.size() >= (closed ? 3u : 2u),
                       "a walking route needs at least " << (closed ? 3 : 2) << " points; got " << path.size());
   vehicle.walk = std::make_unique<vehicles::Polyline>(std::move(path), closed);
@@ -269,14 +275,12 @@ void World::SetCruiseSpeed(State& state, uint32_t id, float speed) {
   if (found && found->kind == AgentKind::kPedestrian) {
     Vehicle& walker = VehicleOf(state, id, AgentKind::kPedestrian, "SetSpeed");
     SIM4CV_THROW_UNLESS(walker.walk, "pedestrian " << id << " has no route to walk at " << speed << " m/s");
-    SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 10,
-                        "walking speed " << speed << " m/s is outside [0, 10]");
+    CheckSpeed(AgentKind::kPedestrian, speed);
     state.Find(id)->cruise_speed = speed;
     return;
   }
   Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetSpeed");
-  SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= 40,
-                      "speed " << speed << " m/s is outside [0, 40]");
+  CheckSpeed(AgentKind::kCar, speed);
   SIM4CV_THROW_UNLESS(vehicle.driver, "car " << id << " has no route to drive at " << speed
                                              << " m/s; give it one (SetRoute) or drive it with Controls");
   vehicle.driver->set_speed(speed);
