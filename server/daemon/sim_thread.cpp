@@ -208,7 +208,9 @@ void SimThread::ApplyControls(session::ControlsCommand& controls) {
 void SimThread::Configure(session::ConfigureCommand& command) {
   proto::Envelope reply;
   try {
-    AfterChange(sim_.Apply(command.request, *reply.mutable_configured()));
+    proto::Configured& answer = *reply.mutable_configured();
+    const Simulation::Change change = sim_.Apply(command.request, answer);
+    AfterChange(change, answer.world());  // only now does the answer hold the world
   } catch (const ConfigureError& refused) {
     session::ClientProtocol::Refuse(refused.code(), refused.what(), false, reply);
     reply.mutable_error()->set_request_id(command.request.request_id());
@@ -217,7 +219,7 @@ void SimThread::Configure(session::ConfigureCommand& command) {
   if (command.link) command.link->OfferReply(std::move(reply));
 }
 
-void SimThread::AfterChange(const Simulation::Change& change) {
+void SimThread::AfterChange(const Simulation::Change& change, const proto::WorldInfo& world) {
   const auto tell = [](const std::vector<std::shared_ptr<session::ClientLink>>& links, const std::string& message) {
     for (const auto& link : links) OfferError(link.get(), proto::ERROR_CODE_UNKNOWN_CAMERA, message);
   };
@@ -239,7 +241,8 @@ void SimThread::AfterChange(const Simulation::Change& change) {
       break;
     }
   }
-  PublishWorld();
+  // The answer already holds the world after the change: publish a copy.
+  if (change.world_changed) directory_.Publish(world);
 }
 
 void SimThread::PublishWorld() {

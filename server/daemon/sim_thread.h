@@ -53,7 +53,8 @@ class SimThread {
   void Subscribe(session::ClientId client, session::SubscribeCommand& subscribe);
   void ApplyControls(session::ControlsCommand& controls);
   void Configure(session::ConfigureCommand& command);
-  void AfterChange(const Simulation::Change& change);
+  // Rebuilds and tells what `change` needs; `world` is the answer's WorldInfo.
+  void AfterChange(const Simulation::Change& change, const proto::WorldInfo& world);
   void BuildGraphics();
   void AdvanceFrame();
   void RenderCamera(uint32_t camera_index);

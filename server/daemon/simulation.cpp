@@ -95,8 +95,10 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       break;
     case Kind::kQueryRoad:
       QueryRoad(request.query_road(), *answer.mutable_road());
+      change.world_changed = false;
       break;
     case Kind::kGetWorld:
+      change.world_changed = false;
       break;
     case Kind::REQUEST_NOT_SET:
       throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "Configure carries no request");

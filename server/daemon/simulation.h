@@ -47,6 +47,8 @@ class Simulation {
     bool new_scene = false;
     // Indices of cameras removed (with their entity, or by RemoveCamera).
     std::vector<uint32_t> removed_cameras;
+    // False for the requests that only ask (GetWorld, QueryRoad): nothing to publish.
+    bool world_changed = true;
   };
   // Carries out `request` and fills `answer`, or throws ConfigureError
   // (changing nothing then).
