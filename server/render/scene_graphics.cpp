@@ -104,24 +104,33 @@ void SceneGraphics::Update(const sim::State& state) {
   moving_.clear();
   for (const sim::Agent& agent : state.agents) {
     const auto instance = static_cast<InstanceId>(agent.id);
-    if (agent.kind == sim::AgentKind::kPedestrian) {
-      // Its body stands on its feet; its box is centred half its height up.
-      items_.push_back({pedestrian_mesh_, BodyPose(agent.body), instance});
-      labelled_.push_back({instance, proto::OBJECT_CLASS_PEDESTRIAN, 0});
-      moving_.push_back({instance, proto::OBJECT_CLASS_PEDESTRIAN,
-                         agent.body.position + kPedestrianBox.z() * Eigen::Vector3d::UnitZ(), agent.body.orientation,
-                         agent.body.linear_velocity, agent.body.angular_velocity, kPedestrianBox});
-      continue;
+    // The 3D box: the physics box, which the car's and the UAV's meshes fit
+    // inside; a pedestrian's body stands on its feet, its box half its height up.
+    Eigen::Vector3d box_centre = agent.body.position, half_extents;
+    MeshId mesh = 0;
+    uint32_t object_class = 0;
+    switch (agent.kind) {
+      case sim::AgentKind::kCar:
+        mesh = agent.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;
+        object_class = proto::OBJECT_CLASS_CAR;
+        half_extents = scene_.car.params.chassis_half_extents;
+        break;
+      case sim::AgentKind::kUav:
+        mesh = uav_mesh_;
+        object_class = proto::OBJECT_CLASS_UAV;
+        half_extents = scene_.uav.params.half_extents;
+        break;
+      case sim::AgentKind::kPedestrian:
+        mesh = pedestrian_mesh_;
+        object_class = proto::OBJECT_CLASS_PEDESTRIAN;
+        half_extents = kPedestrianBox;
+        box_centre.z() += kPedestrianBox.z();
+        break;
     }
-    const bool car = agent.kind == sim::AgentKind::kCar;
-    const MeshId mesh = !car ? uav_mesh_ : agent.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;
     items_.push_back({mesh, BodyPose(agent.body), instance});
-    const uint32_t object_class = car ? proto::OBJECT_CLASS_CAR : proto::OBJECT_CLASS_UAV;
     labelled_.push_back({instance, object_class, 0});
-    // The physics boxes, which the car's and the UAV's meshes fit inside.
-    moving_.push_back({instance, object_class, agent.body.position, agent.body.orientation, agent.body.linear_velocity,
-                       agent.body.angular_velocity,
-                       car ? scene_.car.params.chassis_half_extents : scene_.uav.params.half_extents});
+    moving_.push_back({instance, object_class, box_centre, agent.body.orientation, agent.body.linear_velocity,
+                       agent.body.angular_velocity, half_extents});
   }
   labelled_.insert(labelled_.end(), static_labelled_.begin(), static_labelled_.end());
   if (traffic_) traffic_->Append(state.traffic, state.sim_time, items_, labelled_, moving_);
