@@ -4,7 +4,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config ccache
   libbullet-dev libeigen3-dev libosmesa6-dev libboost-dev
   protobuf-compiler libprotobuf-dev
   libopencv-dev libopencv-contrib-dev
