@@ -5,6 +5,7 @@
 
 #include <sys/types.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,6 +33,10 @@ class DaemonProcess {
   std::string stderr_text() const;
   // The lines of stderr_text() the daemon's log wrote at warning or error level.
   std::vector<std::string> warning_lines() const;
+  // The daemon's resident memory (VmRSS) and its open file descriptors now,
+  // for tests that check what a client can make it hold; 0 / -1 if gone.
+  std::size_t rss_bytes() const;
+  int open_fds() const;
 
  private:
   pid_t pid_ = -1;
