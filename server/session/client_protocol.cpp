@@ -4,7 +4,9 @@
 #include <sstream>
 
 #include "protocol/framing.h"
+#include "server/common/limits.h"
 #include "server/common/log.h"
+#include "server/common/quoted.h"
 #include "server/session/configure_check.h"
 
 namespace sim4cv::session {
@@ -104,22 +106,42 @@ Outcome ClientProtocol::HandleHello(const proto::Hello& hello, proto::Envelope& 
                       "; use a client built for version " + std::to_string(wire::kProtocolVersion),
                   true, reply);
   }
+  if (hello.client_name().size() > limits::kMaxNameBytes) {
+    // Fatal, as every Hello that cannot be accepted: a UDP peer is registered only by its Welcome.
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                  "Hello.client_name is " + std::to_string(hello.client_name().size()) + " bytes long; at most " +
+                      std::to_string(limits::kMaxNameBytes) + " (limits::kMaxNameBytes); connect with a shorter name",
+                  true, reply);
+  }
   handshaken_ = true;
   client_name_ = hello.client_name();
   FillWelcome(context_, client_, *reply.mutable_welcome());
-  LOG_INFO("client " << client_ << " ('" << client_name_ << "') completed the handshake");
+  LOG_INFO("client " << client_ << " (" << Quoted(client_name_) << ") completed the handshake");
   return Outcome::kReply;
 }
 
 Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto::Envelope& reply) {
+  if (subscribe.camera().size() > limits::kMaxNameBytes) {
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                  "Subscribe.camera " + Quoted(subscribe.camera()) + " is longer than any camera name (at most " +
+                      std::to_string(limits::kMaxNameBytes) +
+                      " bytes, limits::kMaxNameBytes); use a name from Welcome.cameras",
+                  false, reply);
+  }
   std::string camera_names;
   const int camera = context_.world.FindCamera(subscribe.camera(), camera_names);
   if (camera < 0) {
     return Refuse(proto::ERROR_CODE_UNKNOWN_CAMERA,
-                  "no camera named '" + subscribe.camera() + "'; this scene has " + camera_names, false, reply);
+                  "no camera named " + Quoted(subscribe.camera()) + "; this scene has " + camera_names, false, reply);
   }
   if (subscribe.channels_size() == 0) {
     return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, "Subscribe.channels is empty; ask for at least one channel",
+                  false, reply);
+  }
+  if (subscribe.channels_size() > proto::CHANNEL_BOXES) {
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                  "Subscribe.channels has " + std::to_string(subscribe.channels_size()) + " entries; at most " +
+                      std::to_string(proto::CHANNEL_BOXES) + ", each channel once",
                   false, reply);
   }
   uint32_t seen = 0;
@@ -221,12 +243,27 @@ Outcome ClientProtocol::HandleGetStats(proto::Envelope& reply) {
 }
 
 Outcome ClientProtocol::HandleConfigure(const proto::Configure& request, proto::Envelope& reply) {
+  // The sim thread carries out every posted request before its next frame:
+  // without a bound, one client's pipelined requests stall every client.
+  const uint32_t outstanding = outstanding_configures_->load(std::memory_order_acquire);
+  if (outstanding >= limits::kMaxOutstandingConfigures) {
+    Refuse(proto::ERROR_CODE_INVALID_STATE,
+           "Configure " + std::to_string(request.request_id()) + " refused: " + std::to_string(outstanding) +
+               " Configure requests of this connection are still waiting for their answers (at most " +
+               std::to_string(limits::kMaxOutstandingConfigures) +
+               ", limits::kMaxOutstandingConfigures); wait for the answers before sending more",
+           false, reply);
+    reply.mutable_error()->set_request_id(request.request_id());
+    return Outcome::kReply;
+  }
   if (const std::string problem = CheckConfigure(request); !problem.empty()) {
     Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
     reply.mutable_error()->set_request_id(request.request_id());
     return Outcome::kReply;
   }
-  context_.commands.Post({client_, ConfigureCommand{request, link_.lock()}});
+  outstanding_configures_->fetch_add(1, std::memory_order_acq_rel);
+  auto answer = std::make_shared<ConfigureReplyLink>(link_.lock(), outstanding_configures_);
+  context_.commands.Post({client_, ConfigureCommand{request, std::move(answer)}});
   return Outcome::kNoReply;
 }
 

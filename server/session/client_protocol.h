@@ -4,6 +4,7 @@
 // move bytes; they ask this class what to answer.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -79,6 +80,9 @@ class ClientProtocol {
   bool disconnected_ = false;
   proto::Subscribed subscription_;
   uint64_t outstanding_steps_ = 0;
+  // Configures posted and not yet answered: counted up here, down by each
+  // request's ConfigureReplyLink when the sim thread answers (its thread).
+  std::shared_ptr<std::atomic<uint32_t>> outstanding_configures_ = std::make_shared<std::atomic<uint32_t>>(0);
 };
 
 }  // namespace sim4cv::session

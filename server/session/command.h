@@ -38,9 +38,41 @@ struct ControlsCommand {
   std::shared_ptr<ClientLink> link;
 };
 
+// One Configure's way back to its client, on every transport: it forwards
+// the answer to the client's own link, and first gives back the client's slot
+// for outstanding Configures (limits::kMaxOutstandingConfigures), so a client
+// that waits for each answer may always send its next request. A request
+// dropped unanswered (the daemon stops) gives its slot back too.
+class ConfigureReplyLink final : public ClientLink {
+ public:
+  // `outstanding` was already counted up for this request.
+  ConfigureReplyLink(std::shared_ptr<ClientLink> link, std::shared_ptr<std::atomic<uint32_t>> outstanding)
+      : link_(std::move(link)), outstanding_(std::move(outstanding)) {}
+  ~ConfigureReplyLink() override { GiveBack(); }
+  ConfigureReplyLink(const ConfigureReplyLink&) = delete;
+  ConfigureReplyLink& operator=(const ConfigureReplyLink&) = delete;
+
+  void OfferFrame(const FrameRef& frame) override {
+    if (link_) link_->OfferFrame(frame);
+  }
+  void OfferReply(proto::Envelope reply) override {
+    GiveBack();
+    if (link_) link_->OfferReply(std::move(reply));
+  }
+
+ private:
+  void GiveBack() {
+    if (outstanding_) outstanding_->fetch_sub(1, std::memory_order_acq_rel);
+    outstanding_.reset();
+  }
+
+  std::shared_ptr<ClientLink> link_;
+  std::shared_ptr<std::atomic<uint32_t>> outstanding_;
+};
+
 // A Configure whose fields are valid on their own (finite, in range); the
 // sim thread checks it against the world, carries it out between frames and
-// answers through `link` (Configured or an Error).
+// answers through `link` (Configured or an Error), a ConfigureReplyLink.
 struct ConfigureCommand {
   proto::Configure request;
   std::shared_ptr<ClientLink> link;

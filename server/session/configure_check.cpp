@@ -2,36 +2,72 @@
 
 #include <cmath>
 #include <sstream>
+#include <type_traits>
+
+#include "server/common/limits.h"
+#include "server/common/quoted.h"
 
 namespace sim4cv::session {
 namespace {
 
-// Accumulates the first problem found; later checks are skipped.
+using limits::kMaxNameBytes;
+
+// A field's name: a string, or a function that builds it, so that a request
+// with 100000 waypoints builds one name only if one of them is bad.
+template <typename Field>
+std::string NameOf(const Field& field) {
+  if constexpr (std::is_invocable_v<const Field&>) {
+    return field();
+  } else {
+    return std::string(field);
+  }
+}
+
+// Accumulates the first problem found; later checks are skipped, and a
+// problem's message is built only when it is the one reported.
 class Checker {
  public:
-  Checker& Range(const char* field, double value, double low, double high) {
-    if (problem_.empty() && !(std::isfinite(value) && value >= low && value <= high)) {
+  bool ok() const { return problem_.empty(); }
+
+  template <typename Field>
+  Checker& Range(const Field& field, double value, double low, double high) {
+    if (ok() && !(std::isfinite(value) && value >= low && value <= high)) {
       std::ostringstream message;
-      message << field << " is " << value << "; it must be a finite number in [" << low << ", " << high << "]";
+      message << NameOf(field) << " is " << value << "; it must be a finite number in [" << low << ", " << high << "]";
       problem_ = message.str();
     }
     return *this;
   }
-  Checker& Finite(const char* field, double value) { return Range(field, value, -1e6, 1e6); }
-  Checker& Vec(const char* field, const proto::Vec3& v) {
-    const std::string name(field);
-    return Finite((name + ".x").c_str(), v.x())
-        .Finite((name + ".y").c_str(), v.y())
-        .Finite((name + ".z").c_str(), v.z());
+  template <typename Field>
+  Checker& Finite(const Field& field, double value) {
+    return Range(field, value, -1e6, 1e6);
   }
-  Checker& True(bool condition, const std::string& problem) {
-    if (problem_.empty() && !condition) problem_ = problem;
+  Checker& Vec(const char* field, const proto::Vec3& v) {
+    return Finite([&] { return std::string(field) + ".x"; }, v.x())
+        .Finite([&] { return std::string(field) + ".y"; }, v.y())
+        .Finite([&] { return std::string(field) + ".z"; }, v.z());
+  }
+  // `problem`: the message, or a function that builds it.
+  template <typename Problem>
+  Checker& True(bool condition, const Problem& problem) {
+    if (ok() && !condition) problem_ = NameOf(problem);
     return *this;
   }
+  // A repeated field's length, checked before anything loops over it.
+  Checker& Count(const char* field, int count, int low, int high, const char* limit) {
+    return True(count >= low && count <= high, [&] {
+      return std::string(field) + " has " + std::to_string(count) + " entries; give " + std::to_string(low) + " to " +
+             std::to_string(high) + " (" + limit + ")";
+    });
+  }
+  // Every name a client gives is bounded (limits::kMaxNameBytes): names are
+  // kept in the world, logged and echoed in Errors.
   Checker& Name(const char* field, const std::string& value, bool may_be_empty) {
-    return True(may_be_empty || !value.empty(), std::string(field) + " is empty; give it a name")
-        .True(value.size() <= 64,
-              std::string(field) + " is " + std::to_string(value.size()) + " characters long; at most 64");
+    return True(may_be_empty || !value.empty(), [&] { return std::string(field) + " is empty; give it a name"; })
+        .True(value.size() <= kMaxNameBytes, [&] {
+          return std::string(field) + " " + Quoted(value) + " is too long; a name has at most " +
+                 std::to_string(kMaxNameBytes) + " bytes (limits::kMaxNameBytes)";
+        });
   }
   std::string problem() const { return problem_; }
 
@@ -45,18 +81,22 @@ std::string CheckLoadMap(const proto::LoadMap& load) {
   if (load.has_name()) {
     const std::string& name = load.name();
     check.Name("LoadMap.name", name, false)
-        .True(name.find("..") == std::string::npos && (name.empty() || name.front() != '/'),
-              "LoadMap.name '" + name +
-                  "' must be a shipped map's name relative to the maps folder, e.g. "
-                  "'tracking/hard_urban' (no '..', no leading '/')");
+        .True(name.find("..") == std::string::npos && (name.empty() || name.front() != '/'), [&] {
+          return "LoadMap.name " + Quoted(name) +
+                 " must be a shipped map's name relative to the maps folder, e.g. "
+                 "'tracking/hard_urban' (no '..', no leading '/')";
+        });
   }
+  check.True(load.text().size() <= limits::kMaxMapTextBytes, [&] {
+    return "LoadMap.text is " + std::to_string(load.text().size()) + " bytes; a map text has at most " +
+           std::to_string(limits::kMaxMapTextBytes) + " bytes (limits::kMaxMapTextBytes)";
+  });
+  check.Name("LoadMap.route", load.route(), true);
   if (load.has_traffic()) {
-    check.Range("LoadMap.traffic.cars", load.traffic().cars(), 0, 500)
-        .Range("LoadMap.traffic.parked", load.traffic().parked(), 0, 2000)
-        .Range("LoadMap.traffic.pedestrians", load.traffic().pedestrians(), 0, 2000);
+    check.Range("LoadMap.traffic.cars", load.traffic().cars(), 0, limits::kMaxTrafficCars)
+        .Range("LoadMap.traffic.parked", load.traffic().parked(), 0, limits::kMaxTrafficParked)
+        .Range("LoadMap.traffic.pedestrians", load.traffic().pedestrians(), 0, limits::kMaxTrafficPedestrians);
   }
-  check.True(load.text().size() <= (4u << 20),
-             "LoadMap.text is " + std::to_string(load.text().size()) + " bytes; a map text may have at most 4 MiB");
   return check.Range("LoadMap.car_speed", load.car_speed(), 0, 40).problem();
 }
 
@@ -75,13 +115,16 @@ std::string CheckSpawn(const proto::Spawn& spawn) {
 std::string CheckSetRoute(const proto::SetRoute& route) {
   Checker check;
   check.True(route.path_case() != proto::SetRoute::PATH_NOT_SET, "SetRoute needs route_name, waypoints or keep_route");
+  check.Name("SetRoute.route_name", route.route_name(), true);
   if (route.has_waypoints()) {
     const auto& points = route.waypoints().points();
-    check.True(points.size() >= 2 && points.size() <= 100000,
-               "SetRoute.waypoints has " + std::to_string(points.size()) + " points; give 2 to 100000");
-    for (int i = 0; i < points.size(); ++i) {
-      const std::string field = "SetRoute.waypoints.points[" + std::to_string(i) + "]";
-      check.Finite((field + ".x").c_str(), points[i].x()).Finite((field + ".y").c_str(), points[i].y());
+    check.Count("SetRoute.waypoints.points", points.size(), 2, limits::kMaxRouteWaypoints,
+                "limits::kMaxRouteWaypoints");
+    for (int i = 0; check.ok() && i < points.size(); ++i) {
+      const auto field = [i](const char* axis) {
+        return [i, axis] { return "SetRoute.waypoints.points[" + std::to_string(i) + "]." + axis; };
+      };
+      check.Finite(field("x"), points[i].x()).Finite(field("y"), points[i].y());
     }
   }
   return check.Range("SetRoute.speed", route.speed(), 0, 40).problem();
@@ -117,8 +160,8 @@ std::string CheckAddCamera(const proto::AddCamera& camera) {
   return Checker()
       .Name("AddCamera.name", camera.name(), false)
       .Name("AddCamera.mounted_on", camera.mounted_on(), true)
-      .Range("AddCamera.width", camera.width(), 16, 1920)
-      .Range("AddCamera.height", camera.height(), 16, 1080)
+      .Range("AddCamera.width", camera.width(), 16, limits::kMaxAddedCameraWidth)
+      .Range("AddCamera.height", camera.height(), 16, limits::kMaxAddedCameraHeight)
       .Range("AddCamera.fov_y_deg", camera.fov_y_deg(), 10, 150)
       .Range("AddCamera.pitch_down_deg", camera.pitch_down_deg(), -90, 90)
       .Finite("AddCamera.yaw_deg", camera.yaw_deg())
@@ -129,7 +172,7 @@ std::string CheckAddCamera(const proto::AddCamera& camera) {
 std::string CheckQueryRoad(const proto::QueryRoad& query) {
   Checker check;
   check.Vec("QueryRoad.point", query.point()).Finite("QueryRoad.heading_deg", query.heading_deg());
-  check.Range("QueryRoad.count", query.count(), 0, 100);
+  check.Range("QueryRoad.count", query.count(), 0, limits::kMaxRoadQueryPoints);
   if (query.count() > 0) check.Range("QueryRoad.step", query.step(), 1e-3, 50);
   return check.problem();
 }

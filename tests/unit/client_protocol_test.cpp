@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "protocol/framing.h"
+#include "server/common/limits.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::session {
@@ -593,6 +594,82 @@ TEST_F(ClientProtocolTest, GetStatsReportsTheCounters) {
   ASSERT_TRUE(counters.contains("shm.replies_dropped"));
   EXPECT_EQ(counters.at("shm.replies_dropped"), 1u);
   EXPECT_TRUE(Drain().empty());
+}
+
+// ---- Bounded names and outstanding Configures (issue 14) ------------------
+
+TEST_F(ClientProtocolTest, OverlongClientNameIsRefusedFatallyWithASmallError) {
+  ExpectError(Send(Hello(wire::kProtocolVersion, std::string(1 << 20, 'n'))), proto::ERROR_CODE_INVALID_ARGUMENT, true,
+              {"Hello.client_name is 1048576 bytes long", "at most 64", "limits::kMaxNameBytes"});
+  EXPECT_LT(reply_.ByteSizeLong(), 512u);
+  EXPECT_EQ(protocol_.client_name(), "");
+  ExpectError(Send(GetState()), proto::ERROR_CODE_NOT_HANDSHAKEN, true, {});
+  // A name of exactly the limit is fine.
+  ASSERT_EQ(Send(Hello(wire::kProtocolVersion, std::string(limits::kMaxNameBytes, 'n'))), Outcome::kReply);
+  EXPECT_TRUE(reply_.has_welcome());
+}
+
+TEST_F(ClientProtocolTest, OverlongCameraNameIsRefusedWithASmallError) {
+  Handshake();
+  ExpectError(Send(Subscribe(std::string(10 << 20, 'c'), {proto::CHANNEL_RGB})), proto::ERROR_CODE_INVALID_ARGUMENT,
+              false, {"Subscribe.camera 'ccc", "(10485760 bytes)", "limits::kMaxNameBytes"});
+  EXPECT_LT(reply_.ByteSizeLong(), 512u);
+  // An unknown camera's name is quoted with its control characters escaped.
+  ExpectError(Send(Subscribe("a\nb", {proto::CHANNEL_RGB})), proto::ERROR_CODE_UNKNOWN_CAMERA, false,
+              {"no camera named 'a\\x0ab'"});
+}
+
+TEST_F(ClientProtocolTest, MoreChannelsThanThereAreIsRefusedBeforeLooking) {
+  Handshake();
+  ExpectError(Send(Subscribe("uav", std::vector<int>(100000, proto::CHANNEL_RGB))), proto::ERROR_CODE_INVALID_ARGUMENT,
+              false, {"Subscribe.channels has 100000 entries", "at most 4"});
+}
+
+proto::Envelope GetWorldRequest(uint32_t request_id) {
+  proto::Envelope e;
+  e.mutable_configure()->set_request_id(request_id);
+  e.mutable_configure()->mutable_get_world();
+  return e;
+}
+
+TEST_F(ClientProtocolTest, ConfiguresOverTheOutstandingLimitAreRefusedUntilOneIsAnswered) {
+  Handshake();
+  const uint32_t limit = limits::kMaxOutstandingConfigures;
+  for (uint32_t id = 1; id <= limit; ++id) ASSERT_EQ(Send(GetWorldRequest(id)), Outcome::kNoReply) << id;
+  // Taken by the sim thread, not yet carried out: still outstanding.
+  std::vector<Command> commands = Drain();
+  ASSERT_EQ(commands.size(), limit);
+  ExpectError(Send(GetWorldRequest(99)), proto::ERROR_CODE_INVALID_STATE, false,
+              {"Configure 99", std::to_string(limit) + " Configure requests", "limits::kMaxOutstandingConfigures",
+               "wait for the answers"});
+  EXPECT_EQ(reply_.error().request_id(), 99u);
+
+  // What the sim thread does: carry them out and answer through each request's link.
+  auto& first = std::get<ConfigureCommand>(commands[0].body);
+  proto::Envelope answer;
+  answer.mutable_configured()->set_request_id(first.request.request_id());
+  first.link->OfferReply(answer);
+  ASSERT_EQ(link_->replies.size(), 1u) << "the answer reaches the client's own link";
+  EXPECT_EQ(link_->replies[0].configured().request_id(), 1u);
+  // Answered: the client may send one more at once, even before the command is destroyed.
+  EXPECT_EQ(Send(GetWorldRequest(5)), Outcome::kNoReply);
+  EXPECT_EQ(Send(GetWorldRequest(6)), Outcome::kReply);
+  // Commands dropped unanswered (the daemon stopping) give their slots back too.
+  commands.clear();
+  for (uint32_t id = 10; id < 10 + limit - 1; ++id) EXPECT_EQ(Send(GetWorldRequest(id)), Outcome::kNoReply) << id;
+  EXPECT_EQ(Send(GetWorldRequest(20)), Outcome::kReply);
+}
+
+TEST_F(ClientProtocolTest, ConfiguresRefusedForTheirFieldsTakeNoSlot) {
+  Handshake();
+  proto::Envelope bad;
+  bad.mutable_configure()->set_request_id(1);
+  for (int i = 0; i < 10; ++i) {
+    ExpectError(Send(bad), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"carries no request"});
+  }
+  for (uint32_t id = 1; id <= limits::kMaxOutstandingConfigures; ++id) {
+    EXPECT_EQ(Send(GetWorldRequest(id)), Outcome::kNoReply) << id;
+  }
 }
 
 // ---- Disconnect and Refuse -----------------------------------------------

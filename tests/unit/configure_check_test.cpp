@@ -5,8 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "server/common/limits.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::session {
@@ -77,11 +81,62 @@ TEST(ConfigureCheckTest, EachBadFieldIsNamedWithItsValue) {
   ExpectProblem(request, "AddCamera.width is 8");
   camera.set_width(160);
   camera.set_name(std::string(65, 'x'));
-  ExpectProblem(request, "AddCamera.name is 65 characters long");
+  ExpectProblem(request, "AddCamera.name 'xxx");
+  ExpectProblem(request, "(65 bytes) is too long; a name has at most 64 bytes (limits::kMaxNameBytes)");
 
   request.Clear();
   request.mutable_query_road()->set_count(101);
   ExpectProblem(request, "QueryRoad.count is 101");
+}
+
+// Repeated fields are refused by their count before anything loops over
+// them, and an Error quotes at most a few bytes of what the client sent.
+TEST(ConfigureCheckTest, WaypointCountIsRefusedBeforeThePointsAreLookedAt) {
+  proto::Configure request;
+  auto* points = request.mutable_set_route()->mutable_waypoints()->mutable_points();
+  for (int i = 0; i <= limits::kMaxRouteWaypoints; ++i) points->Add()->set_x(NAN);
+  const std::string problem = CheckConfigure(request);
+  EXPECT_NE(problem.find("SetRoute.waypoints.points has 100001 entries; give 2 to 100000"), std::string::npos) << problem;
+  EXPECT_NE(problem.find("limits::kMaxRouteWaypoints"), std::string::npos) << problem;
+  points->RemoveLast();
+  ExpectProblem(request, "SetRoute.waypoints.points[0].x is nan");
+  for (auto& point : *points) point.set_x(1);
+  points->Mutable(99999)->set_y(INFINITY);
+  ExpectProblem(request, "SetRoute.waypoints.points[99999].y is inf");
+  points->Mutable(99999)->set_y(0);
+  EXPECT_EQ(CheckConfigure(request), "");
+}
+
+TEST(ConfigureCheckTest, EveryNameIsBoundedAndQuotedShort) {
+  const std::string huge(1 << 20, 'q');
+  const std::vector<std::pair<std::string, std::function<void(proto::Configure&)>>> cases = {
+      {"LoadMap.name", [&](proto::Configure& c) { c.mutable_load_map()->set_name(huge); }},
+      {"LoadMap.route", [&](proto::Configure& c) { c.mutable_load_map()->set_name("x"), c.mutable_load_map()->set_route(huge); }},
+      {"Spawn.name", [&](proto::Configure& c) {
+         c.mutable_spawn()->set_kind(proto::ENTITY_KIND_CAR);
+         c.mutable_spawn()->set_name(huge);
+       }},
+      {"SetRoute.route_name", [&](proto::Configure& c) { c.mutable_set_route()->set_route_name(huge); }},
+      {"AddCamera.name", [&](proto::Configure& c) { c.mutable_add_camera()->set_name(huge); }},
+      {"AddCamera.mounted_on", [&](proto::Configure& c) {
+         c.mutable_add_camera()->set_name("cam");
+         c.mutable_add_camera()->set_mounted_on(huge);
+       }},
+      {"RemoveCamera.name", [&](proto::Configure& c) { c.mutable_remove_camera()->set_name(huge); }},
+  };
+  for (const auto& [field, fill] : cases) {
+    proto::Configure request;
+    fill(request);
+    const std::string problem = CheckConfigure(request);
+    EXPECT_EQ(problem.rfind(field + " 'qqq", 0), 0u) << field << ": " << problem;
+    EXPECT_NE(problem.find("(1048576 bytes) is too long; a name has at most 64 bytes (limits::kMaxNameBytes)"),
+              std::string::npos)
+        << problem;
+    EXPECT_LT(problem.size(), 256u) << field;
+  }
+  proto::Configure text;
+  text.mutable_load_map()->set_text(std::string(limits::kMaxMapTextBytes + 1, '#'));
+  ExpectProblem(text, "LoadMap.text is 4194305 bytes; a map text has at most 4194304 bytes (limits::kMaxMapTextBytes)");
 }
 
 }  // namespace
