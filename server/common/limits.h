@@ -27,6 +27,11 @@ inline constexpr std::size_t kQuotedBytes = 64;
 // LoadMap.text: the largest map text the sim thread is asked to parse.
 inline constexpr std::size_t kMaxMapTextBytes = std::size_t{4} << 20;
 
+// One line of a map (LoadMap.text or a --map file): every parser Error
+// quotes tokens of its line, so the line is bounded, well above a grid row
+// of the widest grid.
+inline constexpr std::size_t kMaxMapLineBytes = 4096;
+
 // SetRoute.waypoints.points: each point is kept (and checked) by the car's
 // route follower.
 inline constexpr int kMaxRouteWaypoints = 100000;

@@ -243,5 +243,25 @@ TEST_F(HardeningSessionTest, OverlongNamesInConfigureAreRefusedWithASmallError) 
   EXPECT_EQ(client->GetWorld().entities_size(), 2) << "nothing was changed";
 }
 
+// A map's text is echoed by the parser's Errors (the line, its tokens): a
+// line is bounded, and the Error quotes it short.
+TEST_F(HardeningSessionTest, MapTextWithAHugeLineGetsASmallError) {
+  StartDaemon();
+  auto client = Connect("mapper");
+  const std::string header = "sim4cv-map 1\nname huge\n";
+  ExpectRefused([&] { client->LoadMapText(header + "colour " + std::string(1 << 20, 'r') + "\n"); },
+                proto::ERROR_CODE_INVALID_ARGUMENT,
+                {"LoadMap.text", "map line 3 is 1048583 bytes long", "limits::kMaxMapLineBytes"});
+  try {
+    client->LoadMapText(header + "colour" + std::string(4000, 'r') + "\n");
+    ADD_FAILURE() << "a map with an unknown keyword was loaded";
+  } catch (const ServerError& error) {
+    EXPECT_NE(std::string(error.what()).find("map line 3 'colourrrr"), std::string::npos) << error.what();
+    EXPECT_LT(std::string(error.what()).size(), 8192u);
+  }
+  const std::size_t log_bytes = daemon_->stderr_text().size();
+  EXPECT_LT(log_bytes, 64u * 1024) << "the refusals were logged in full";
+}
+
 }  // namespace
 }  // namespace sim4cv::testing

@@ -9,6 +9,8 @@
 #include <tuple>
 
 #include "server/common/check.h"
+#include "server/common/limits.h"
+#include "server/common/quoted.h"
 #include "server/sim/map/map_text.h"
 
 namespace sim4cv::map {
@@ -38,6 +40,9 @@ class Parser {
     std::istringstream lines(text);
     while (std::getline(lines, line_)) {
       ++line_number_;
+      SIM4CV_THROW_UNLESS(line_.size() <= limits::kMaxMapLineBytes,
+                          "map line " << line_number_ << " is " << line_.size() << " bytes long; a map line has at most "
+                                      << limits::kMaxMapLineBytes << " (limits::kMaxMapLineBytes)");
       if (!line_.empty() && line_.back() == '\r') line_.pop_back();
       if (in_grid_ && grid_rows_.size() < static_cast<std::size_t>(map_.height)) {
         ReadGridRow();
@@ -71,7 +76,7 @@ class Parser {
 
  private:
   // The prefix of every message about the current line.
-  std::string Here() const { return "map line " + std::to_string(line_number_) + " '" + line_ + "': "; }
+  std::string Here() const { return "map line " + std::to_string(line_number_) + " " + Quoted(line_) + ": "; }
 
   void ReadHeader(const std::string& keyword, std::istringstream& words) {
     std::string version, extra;
