@@ -44,6 +44,13 @@ inline constexpr uint32_t kMaxRoadQueryPoints = 100;
 inline constexpr uint32_t kMaxAddedCameraWidth = 1920;
 inline constexpr uint32_t kMaxAddedCameraHeight = 1080;
 
+// Cameras at once (AddCamera over it: INVALID_STATE): every frame renders
+// each subscribed one. Removed cameras keep their index (a subscription by
+// index is never handed another camera) until LoadMap or Reset, so the
+// indices used since are bounded too.
+inline constexpr std::size_t kMaxCameras = 32;
+inline constexpr std::size_t kMaxCameraIndices = 1024;
+
 // LoadMap.traffic: agents the map's traffic steps every frame.
 inline constexpr uint32_t kMaxTrafficCars = 500;
 inline constexpr uint32_t kMaxTrafficParked = 2000;

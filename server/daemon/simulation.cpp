@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <numbers>
 
+#include "server/common/limits.h"
 #include "server/daemon/run_logger.h"
 #include "server/sim/map/map_text.h"
 
@@ -11,9 +12,8 @@ namespace sim4cv::daemon {
 namespace {
 
 constexpr double kDegrees = std::numbers::pi / 180.0;
-// More cameras than this would make every frame's render loop a burden.
-constexpr std::size_t kMaxCameras = 32;
-constexpr std::size_t kMaxCameraIndices = 1024;
+using limits::kMaxCameraIndices;
+using limits::kMaxCameras;
 
 double Degrees(double radians) { return radians / kDegrees; }
 
