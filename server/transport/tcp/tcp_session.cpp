@@ -103,6 +103,7 @@ void TcpSession::HandleRequest() {
   // The parsed fields of a large message would keep its memory: give it back.
   if (body.size() > limits::kKeptBufferBytes) request_ = proto::Envelope();
   reader_.Next();
+  ArmTimer();  // the next deadline may be sooner now (e.g. the idle one after the handshake's)
   Reply(outcome);
 }
 
