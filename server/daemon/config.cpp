@@ -90,10 +90,19 @@ Usage: sim4cvd [flags]
   --width N, --height N     camera resolution in pixels (default 320 x 180)
   --mode lockstep|realtime  lockstep: a frame advances when every lockstep client sent Step;
                             realtime: simulated time follows wall time, newest frame only (default lockstep)
-  --max-message-bytes N     largest Envelope a client may send (default 67108864)
-  --max-clients N           most simultaneous connections (default 64)
+  --max-message-bytes N     largest Envelope a client may send (default 2097152: a LoadMap's map
+                            text, at most 1 MiB, and room to spare)
+  --max-clients N           most simultaneous connections (default 64); with the daemon's own files
+                            they must fit the descriptor limit (ulimit -n), raised if it can be
   --tcp-send-buffer N       kernel send buffer per TCP connection in bytes, 0 = kernel default
                             (default 262144: small, so slow newest-frame readers get fresh frames)
+  --handshake-timeout-ms N  a TCP client must have sent its whole Hello this long after connecting
+                            (default 10000; 0 = no limit)
+  --message-timeout-ms N    a message a TCP client started must be complete within this (default
+                            10000; 0 = no limit)
+  --idle-timeout-ms N       a handshaken TCP client that neither sends nor receives anything for this
+                            long is disconnected (default 0 = never: a lockstep client paused in a
+                            debugger stays connected)
   --udp-port N              UDP port; 0 picks any free port, -1 turns UDP off (default 0)
   --udp-datagram-bytes N    largest datagram the daemon sends; frames are chunked to fit
                             (default 65000 for loopback; 1472 for a 1500-byte MTU network)
@@ -166,6 +175,12 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--max-clients", [&](auto& f, auto& v) { config.max_clients = ParseNumber<uint32_t>(f, v, 1, 100000); }},
       {"--tcp-send-buffer",
        [&](auto& f, auto& v) { config.tcp_send_buffer_bytes = ParseNumber<uint32_t>(f, v, 0, 1u << 30); }},
+      {"--handshake-timeout-ms",
+       [&](auto& f, auto& v) { config.handshake_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
+      {"--message-timeout-ms",
+       [&](auto& f, auto& v) { config.message_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
+      {"--idle-timeout-ms",
+       [&](auto& f, auto& v) { config.idle_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
       {"--udp-port", [&](auto& f, auto& v) { config.udp_port = ParseNumber<int32_t>(f, v, -1, 65535); }},
       {"--udp-datagram-bytes",
        [&](auto& f, auto& v) { config.udp_datagram_bytes = ParseNumber<uint32_t>(f, v, 576, 65000); }},

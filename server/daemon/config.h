@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "protocol/shm_layout.h"
+#include "server/common/limits.h"
 #include "server/sim/traffic/traffic_config.h"
 #include "sim4cv.pb.h"
 
@@ -34,9 +35,13 @@ struct Config {
   uint32_t width = 320;
   uint32_t height = 180;
   proto::SimMode mode = proto::SIM_MODE_LOCKSTEP;
-  uint32_t max_message_bytes = 64u << 20;
+  uint32_t max_message_bytes = limits::kDefaultMaxMessageBytes;
   uint32_t max_clients = 64;
   uint32_t tcp_send_buffer_bytes = 256u << 10;
+  // TCP connection timeouts (docs/protocol.md, section 2); 0 turns one off.
+  uint32_t handshake_timeout_ms = limits::kDefaultHandshakeTimeoutMs;
+  uint32_t message_timeout_ms = limits::kDefaultMessageTimeoutMs;
+  uint32_t idle_timeout_ms = limits::kDefaultIdleTimeoutMs;
   int32_t udp_port = 0;  // -1: no UDP transport
   uint32_t udp_datagram_bytes = 65000;
   uint32_t udp_expiry_ms = 5000;

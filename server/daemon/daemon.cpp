@@ -59,8 +59,9 @@ int RunDaemon(const Config& config) {
   const sim::Scene& scene = *initial_scene;
 
   std::vector<std::unique_ptr<transport::Transport>> transports;
-  transports.push_back(transport::MakeTcpTransport({config.bind_address, config.tcp_port, config.max_clients,
-                                                    config.max_message_bytes, config.tcp_send_buffer_bytes}));
+  transports.push_back(transport::MakeTcpTransport(
+      {config.bind_address, config.tcp_port, config.max_clients, config.max_message_bytes, config.tcp_send_buffer_bytes,
+       {config.handshake_timeout_ms, config.message_timeout_ms, config.idle_timeout_ms}}));
   if (config.udp_port >= 0) {
     transports.push_back(
         transport::MakeUdpTransport({config.bind_address, static_cast<uint16_t>(config.udp_port),

@@ -51,13 +51,16 @@ TEST(ConfigTest, Defaults) {
   EXPECT_EQ(config.width, 320u);
   EXPECT_EQ(config.height, 180u);
   EXPECT_EQ(config.mode, proto::SIM_MODE_LOCKSTEP);
-  EXPECT_EQ(config.max_message_bytes, 64u << 20);
+  EXPECT_EQ(config.max_message_bytes, 2u << 20);
   EXPECT_EQ(config.max_clients, 64u);
   EXPECT_EQ(config.tcp_send_buffer_bytes, 256u << 10);
   EXPECT_EQ(config.udp_port, 0);
   EXPECT_EQ(config.udp_datagram_bytes, 65000u);
   EXPECT_EQ(config.udp_expiry_ms, 5000u);
   EXPECT_EQ(config.shm_name, "");
+  EXPECT_EQ(config.handshake_timeout_ms, 10000u);
+  EXPECT_EQ(config.message_timeout_ms, 10000u);
+  EXPECT_EQ(config.idle_timeout_ms, 0u);
   EXPECT_EQ(config.shm_camera, "uav");
   EXPECT_EQ(config.shm_slots, 8u);
   EXPECT_EQ(config.shm_channel_mask, 0x0eu) << "RGB, depth and mask, as before the flag existed";
@@ -81,6 +84,9 @@ TEST(ConfigTest, EachFlagParses) {
   EXPECT_EQ(Parse({"--max-message-bytes", "1048576"}).max_message_bytes, 1048576u);
   EXPECT_EQ(Parse({"--max-clients", "3"}).max_clients, 3u);
   EXPECT_EQ(Parse({"--tcp-send-buffer", "0"}).tcp_send_buffer_bytes, 0u);
+  EXPECT_EQ(Parse({"--handshake-timeout-ms", "0"}).handshake_timeout_ms, 0u);
+  EXPECT_EQ(Parse({"--message-timeout-ms", "250"}).message_timeout_ms, 250u);
+  EXPECT_EQ(Parse({"--idle-timeout-ms", "60000"}).idle_timeout_ms, 60000u);
   EXPECT_EQ(Parse({"--tcp-send-buffer", "1048576"}).tcp_send_buffer_bytes, 1048576u);
   EXPECT_EQ(Parse({"--udp-port", "-1"}).udp_port, -1);
   EXPECT_EQ(Parse({"--udp-port", "6000"}).udp_port, 6000);
@@ -155,7 +161,8 @@ TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
                           "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--shm-channels", "--log-level", "--log ", "--log-label",
                           "--replay", "--replay-only", "--maps-dir", "--traffic-cars", "--traffic-parked",
                           "--traffic-pedestrians", "--traffic-lights", "--traffic-green", "--traffic-seed", "--help",
-                          "lockstep", "realtime"});
+                          "lockstep", "realtime", "--handshake-timeout-ms", "--message-timeout-ms",
+                          "--idle-timeout-ms"});
     EXPECT_EQ(help, HelpText());
   }
   // --help wins even before a bad flag.

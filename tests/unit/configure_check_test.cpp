@@ -136,7 +136,7 @@ TEST(ConfigureCheckTest, EveryNameIsBoundedAndQuotedShort) {
   }
   proto::Configure text;
   text.mutable_load_map()->set_text(std::string(limits::kMaxMapTextBytes + 1, '#'));
-  ExpectProblem(text, "LoadMap.text is 4194305 bytes; a map text has at most 4194304 bytes (limits::kMaxMapTextBytes)");
+  ExpectProblem(text, "LoadMap.text is 1048577 bytes; a map text has at most 1048576 bytes (limits::kMaxMapTextBytes)");
 }
 
 }  // namespace

@@ -1,9 +1,17 @@
 // One TCP connection: reads length-prefixed Envelopes, asks ClientProtocol
 // what they mean, writes replies and frames. Runs on the transport's Asio
 // thread, except OfferFrame and OfferReply, which the sim thread calls.
+//
+// What one client can make it hold is bounded (docs/protocol.md, section 11):
+// a message's bytes only as they arrive (MessageReader), replies waiting to
+// be sent by back-pressure (nothing more is read from a client while they
+// exceed limits::kReplyBacklogBytes), the sim thread's replies by
+// OfferedReplies' bound, and time by ConnectionDeadlines (handshake, message
+// and idle timeouts, then limits::kCloseLingerMs for a fatal Error to leave).
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <utility>  // Boost 1.74 Asio uses std::exchange without including it
 #include <boost/asio.hpp>
 #include <deque>
@@ -15,6 +23,9 @@
 #include "server/session/client_protocol.h"
 #include "server/session/offered_replies.h"
 #include "server/transport/frame_encoding.h"
+#include "server/transport/tcp/connection_deadlines.h"
+#include "server/transport/tcp/message_reader.h"
+#include "server/transport/tcp/tcp_transport.h"
 
 namespace sim4cv::transport {
 
@@ -23,7 +34,7 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   using OnClosed = std::function<void(session::ClientId)>;
 
   TcpSession(boost::asio::ip::tcp::socket socket, session::ClientId client, const session::ServerContext& context,
-             uint32_t send_buffer_bytes, OnClosed on_closed);
+             const TcpOptions& options, OnClosed on_closed);
 
   // Starts reading. Must be called once, on the Asio thread, after
   // construction through make_shared.
@@ -38,12 +49,20 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   void OfferReply(proto::Envelope reply) override;
 
  private:
-  void ReadPrefix();
-  void ReadBody(uint32_t size);
+  using Clock = std::chrono::steady_clock;
+
+  void ContinueReading();
+  void ReadSome();
+  void OnRead(const boost::system::error_code& error, std::size_t count);
   void HandleRequest();
   void Reply(session::ClientProtocol::Outcome outcome);
   void CloseAfterWrites(const proto::Envelope& error);
-  void QueueEnvelope(const proto::Envelope& envelope);
+  // Appends the framed envelope to the replies; returns its size in bytes.
+  std::size_t QueueEnvelope(const proto::Envelope& envelope);
+  // Bytes of replies waiting to be sent: queued here, in flight, and offered by the sim thread.
+  std::size_t Backlog() const { return queued_bytes_ + offered_replies_.bytes(); }
+  void ArmTimer();
+  void OnTimer();
   void TakeOfferedReplies();
   void WakeWriter();
   void PumpWrites();
@@ -58,15 +77,25 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   std::unique_ptr<session::ClientProtocol> protocol_;
   session::FrameMailbox mailbox_;
 
-  // Reading (reused buffers: nothing allocated per message once warm).
-  uint8_t prefix_[4] = {};
-  std::string body_;
+  // Reading (reused buffers: nothing allocated per message once warm; those
+  // a large message grew are given back after it).
+  MessageReader reader_;
   proto::Envelope request_;
   proto::Envelope reply_;
+  bool reading_ = false;      // a read is in flight
+  bool read_paused_ = false;  // back-pressure: the backlog is over its bound
+
+  // Timeouts: one timer, set for the earliest deadline (lazily: a deadline
+  // that moves later is found when the timer fires).
+  ConnectionDeadlines deadlines_;
+  boost::asio::steady_timer timer_;
+  Clock::time_point timer_at_ = Clock::time_point::max();
+  Clock::time_point close_deadline_ = Clock::time_point::max();  // after a fatal Error
 
   // Writing: replies go before frames; one write in flight at a time.
   std::deque<std::string> replies_;
   std::string reply_in_flight_;
+  std::size_t queued_bytes_ = 0;  // replies_ and reply_in_flight_
   session::OfferedReplies offered_replies_;  // from the sim thread
   std::vector<proto::Envelope> offered_;     // reused: those taken from offered_replies_
   session::FrameRef next_frame_;             // taken from the mailbox, waiting for replies to go first

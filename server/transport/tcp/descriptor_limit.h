@@ -1,0 +1,19 @@
+// Each TCP connection takes a file descriptor: checked at start against the
+// process's limit (RLIMIT_NOFILE), so --max-clients cannot promise more
+// connections than the daemon can accept (issue 14, finding 12).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace sim4cv::transport {
+
+// Makes sure `max_clients` connections plus limits::kReservedDescriptors fit
+// under the soft descriptor limit, raising it towards the hard limit if
+// needed. Throws std::runtime_error naming both numbers if they cannot fit.
+void EnsureDescriptorsFor(uint32_t max_clients);
+
+// "N descriptors open, limit M": for the log when accept() fails.
+std::string DescriptorUsage();
+
+}  // namespace sim4cv::transport
