@@ -249,9 +249,9 @@ TEST_F(HardeningSessionTest, MapTextWithAHugeLineGetsASmallError) {
   StartDaemon();
   auto client = Connect("mapper");
   const std::string header = "sim4cv-map 1\nname huge\n";
-  ExpectRefused([&] { client->LoadMapText(header + "colour " + std::string(1 << 20, 'r') + "\n"); },
+  ExpectRefused([&] { client->LoadMapText(header + "colour " + std::string(100000, 'r') + "\n"); },
                 proto::ERROR_CODE_INVALID_ARGUMENT,
-                {"LoadMap.text", "map line 3 is 1048583 bytes long", "limits::kMaxMapLineBytes"});
+                {"LoadMap.text", "map line 3 is 100007 bytes long", "limits::kMaxMapLineBytes"});
   try {
     client->LoadMapText(header + "colour" + std::string(4000, 'r') + "\n");
     ADD_FAILURE() << "a map with an unknown keyword was loaded";
