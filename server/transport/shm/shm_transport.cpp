@@ -274,8 +274,9 @@ class ShmTransport : public Transport {
   // Takes at most one ring's worth of requests from each client that rang:
   // one client's flood cannot hold back the others.
   void DrainReady(Clock::time_point now) {
-    std::set<uint64_t> again;
-    for (const uint64_t serial : std::set<uint64_t>(std::move(ready_))) {
+    std::set<uint64_t> now_ready, again;
+    now_ready.swap(ready_);
+    for (const uint64_t serial : now_ready) {
       const auto it = clients_.find(serial);
       if (it == clients_.end()) continue;
       Attachment& a = *it->second;

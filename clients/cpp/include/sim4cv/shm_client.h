@@ -199,7 +199,10 @@ class ShmClient {
   bool TryReadResponse(proto::Envelope& reply);
   bool NextResponse(proto::Envelope& reply, Deadline deadline);  // from shared memory, not pending_
   bool ReceiveKind(proto::Envelope::KindCase kind, proto::Envelope& out, Deadline deadline);
-  void RequireAttached() const;  // throws ConnectionError
+  // Throws ConnectionError unless attached; `check_socket` also asks the
+  // kernel whether the daemon's end of the socket is still open (a syscall).
+  void RequireAttached(bool check_socket) const;
+  bool attached(bool check_socket) const;
 
   // The frame object (read-only) and the geometry this client checked.
   uint8_t* frames_ = nullptr;

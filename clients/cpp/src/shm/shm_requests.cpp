@@ -37,11 +37,14 @@ void ShmClient::SendEnvelope(const Envelope& envelope) {
   SendRaw(scratch_.data(), scratch_.size());
 }
 
-bool ShmClient::attached() const {
+bool ShmClient::attached() const { return attached(true); }
+
+bool ShmClient::attached(bool check_socket) const {
   if (!area_) return false;
   auto& closed = shm::AreaMap(area_).header().closed;
   if (shm::Atomic(closed).load(std::memory_order_acquire) != 0) return false;
-  // The daemon may also have died: its end of the socket is then closed.
+  if (!check_socket) return true;
+  // The daemon may also have died (SIGKILL): its end of the socket is then closed.
   pollfd socket{socket_, POLLIN, 0};
   if (poll(&socket, 1, 0) == 1 && (socket.revents & (POLLHUP | POLLERR | POLLRDHUP | POLLIN)) != 0) {
     char byte;
@@ -50,10 +53,10 @@ bool ShmClient::attached() const {
   return true;
 }
 
-void ShmClient::RequireAttached() const {
+void ShmClient::RequireAttached(bool check_socket) const {
   if (!frames_) throw ShmError("ShmClient::Open must succeed before sending");
   if (!area_) throw ConnectionError("this shared-memory client is not attached to sim4cvd (Open failed or was not called)");
-  if (!attached()) {
+  if (!attached(check_socket)) {
     throw ConnectionError("sim4cvd ended this shared-memory client's attachment to " + name_ +
                           " (it stopped, or the client was silent for its --shm-expiry-ms); send Hello to attach again");
   }
@@ -64,14 +67,14 @@ void ShmClient::SendRaw(const void* data, std::size_t size) {
     throw ShmError("message of " + std::to_string(size) + " bytes exceeds the " +
                    std::to_string(shm::kShmRequestDataBytes) + "-byte request slot");
   }
-  RequireAttached();
+  RequireAttached(false);  // the flag only: no system call on the fast path
   const shm::AreaMap area(area_);
   shm::ShmAreaHeader& h = area.header();
   // Only free slots may be written: wait (briefly: the daemon drains within
   // microseconds) while the daemon has not yet taken the request a ring ago.
   const auto give_up = std::chrono::steady_clock::now() + kRingFullLimit;
   while (next_request_ - shm::Atomic(h.request_read).load(std::memory_order_acquire) >= shm::kShmRequestCapacity) {
-    RequireAttached();
+    RequireAttached(true);
     if (std::chrono::steady_clock::now() > give_up) {
       throw ConnectionError("sim4cvd took none of this client's " + std::to_string(shm::kShmRequestCapacity) +
                             " queued shared-memory requests for " + std::to_string(kRingFullLimit.count()) + " s");
@@ -117,14 +120,17 @@ bool ShmClient::NextResponse(Envelope& reply, Deadline deadline) {
   if (!frames_) throw ShmError("ShmClient::Open must succeed before receiving");
   if (!area_) throw ConnectionError("this shared-memory client is not attached to sim4cvd");
   auto& futex = shm::AreaMap(area_).header().response_futex;
-  const auto spin_end = std::chrono::steady_clock::now() + spin_;
+  const auto start = std::chrono::steady_clock::now();
+  const auto spin_end = start + spin_;
   for (;;) {
     const uint32_t seen = shm::Atomic(futex).load(std::memory_order_seq_cst);
     if (TryReadResponse(reply)) return true;
     // Every response was read: if the attachment is over, none will come.
     if (closed()) throw ConnectionError("sim4cvd stopped: the shared-memory ring " + name_ + " is closed");
-    RequireAttached();
     const auto now = std::chrono::steady_clock::now();
+    // The flag says whether the daemon ended the attachment; after a while
+    // also look at the socket, in case the daemon died without saying so.
+    RequireAttached(now - start > std::chrono::milliseconds(100));
     if (now >= deadline) return false;
     if (now < spin_end) continue;
     // The daemon bumps the word and wakes after every response, and when it
