@@ -44,9 +44,7 @@ using Outcome = session::ClientProtocol::Outcome;
 
 // epoll keys: an attachment's serial times 2, plus 1 for its doorbell.
 constexpr uint64_t kListenKey = UINT64_MAX, kStopKey = UINT64_MAX - 1;
-// After accept fails for lack of descriptors, the listener rests this long
-// instead of waking the thread again at once for the same connection.
-constexpr auto kAcceptRest = std::chrono::milliseconds(100);
+constexpr auto kAcceptRest = std::chrono::milliseconds(limits::kShmAcceptRestMs);
 
 struct Attachment {
   int socket = -1;
@@ -282,7 +280,7 @@ class ShmTransport : public Transport {
       Attachment& a = *it->second;
       ShmClientArea::Take take = ShmClientArea::Take::kEmpty;
       std::string why;
-      for (uint32_t n = 0; n < shm::kShmRequestCapacity; ++n) {
+      for (uint32_t n = 0; n < limits::kShmRequestsPerTurn; ++n) {
         const uint8_t* data = nullptr;
         uint32_t size = 0;
         take = a.area->Next(data, size, why);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "protocol/shm_layout.h"
+#include "server/common/limits.h"
 #include "server/transport/transport.h"
 
 namespace sim4cv::transport {
@@ -20,7 +21,7 @@ struct ShmOptions {
   uint32_t slot_count = 8;          // frame slots in the ring
   uint32_t width = 0, height = 0;   // the camera's image size, which sizes the slots (required)
   uint32_t expiry_ms = 5000;        // a client that sends nothing this long is disconnected
-  uint32_t max_clients = 64;        // shared-memory clients attached at once
+  uint32_t max_clients = limits::kShmMaxClients;  // shared-memory clients attached at once
   // Bit (1 << proto::Channel) per pixel channel the slots carry (--shm-channels): a
   // ring without the channels its readers skip copies and holds less per frame.
   uint32_t channel_mask = shm::kShmAllPixelChannels;
