@@ -3,11 +3,9 @@
 //   1. frame wake: a writer thread publishes a small frame at random 0.5-2 ms
 //      gaps; a reader in WaitForFrame measures publish -> awake, for several
 //      client spin lengths (0 = futex only), with the reader's CPU use;
-//   2. reply round trip in-process: request through the reply ring, answer
-//      through the response area, with the consumer waiting on the futex
-//      (with and without a spin) or polling every 1 ms;
-//   3. against the real daemon: GetState round trip over shm and over TCP,
-//      and lockstep Step -> frame over shm and over TCP.
+//   2. against the real daemon: GetState round trip over shm (request ring +
+//      doorbell, response ring + futex) and over TCP, and lockstep Step ->
+//      frame over shm and over TCP.
 //   sim4cv_bench_shm_latency [--samples N] [--width W --height H]
 #include <sys/resource.h>
 #include <time.h>
@@ -23,8 +21,6 @@
 
 #include "bench/stats.h"
 #include "server/session/counters.h"
-#include "server/transport/shm/shm_reply_reader.h"
-#include "server/transport/shm/shm_responder.h"
 #include "server/transport/shm/shm_ring_writer.h"
 #include "sim4cv/shm_client.h"
 #include "tests/support/daemon_process.h"
@@ -43,15 +39,12 @@ double ThreadCpuSeconds() {
          static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1e6;
 }
 
-std::shared_ptr<transport::ShmRegion> MakeRegion(const std::string& what) {
+std::shared_ptr<transport::ShmRegion> MakeRegion() {
   transport::ShmRegionParams p;
-  p.name = "/sim4cv-bench-" + what + "-" + std::to_string(getpid());
   p.camera_name = "uav";
   p.width = 16;
   p.height = 16;
   p.slot_count = 4;
-  p.reply_capacity = 256;
-  p.response_entries = 4;
   return std::make_shared<transport::ShmRegion>(p);
 }
 
@@ -61,10 +54,10 @@ void Print(const char* what, const std::vector<double>& us, const std::string& e
 }
 
 void FrameWake(int samples, std::chrono::microseconds spin) {
-  auto region = MakeRegion("wake");
+  auto region = MakeRegion();
   transport::ShmRingWriter writer(region, 0);
   ShmClient client;
-  client.Open(region->params().name);
+  client.OpenFrames(region->fd());  // read-only, as a client attached through the socket maps it
   client.set_spin(spin);
   std::thread publisher([&] {
     std::mt19937 random(7);
@@ -94,58 +87,10 @@ void FrameWake(int samples, std::chrono::microseconds spin) {
   }
   const double cpu = (ThreadCpuSeconds() - cpu_before) / std::chrono::duration<double>(Clock::now() - start).count();
   publisher.join();
-  region->Unlink();
   char label[96], extra[64];
   std::snprintf(label, sizeof label, "frame wake, reader spin %5lld us", static_cast<long long>(spin.count()));
   std::snprintf(extra, sizeof extra, "  reader CPU %4.0f%%", cpu * 100);
   Print(label, us, extra);
-}
-
-// consumer: 0 = futex, 1 = futex after a 20 us spin, 2 = poll every 1 ms.
-void ReplyRoundTrip(int samples, int consumer) {
-  auto region = MakeRegion("reply");
-  session::Counters counters;
-  transport::ShmReplyReader reader(region, counters, consumer == 1 ? 20us : 0us);
-  transport::ShmResponder responder(region);
-  ShmClient client;
-  client.Open(region->params().name);
-  const int entry = responder.Assign(client.token());
-  std::atomic<bool> stop{false};
-  std::thread daemon([&] {
-    proto::Envelope reply;
-    reply.mutable_state()->set_frame_id(1);
-    while (!stop) {
-      const uint32_t seen = reader.futex_value();
-      transport::ShmReplyReader::Message message;
-      while (reader.Next(message, Clock::now()) == transport::ShmReplyReader::Result::kMessage)
-        responder.Write(entry, reply);
-      if (consumer == 2) {
-        std::this_thread::sleep_for(1ms);
-      } else {
-        reader.Wait(seen, 100ms);
-      }
-    }
-  });
-  std::vector<double> us;
-  proto::Envelope request, reply;
-  request.mutable_get_state();
-  std::mt19937 random(3);
-  std::uniform_int_distribution<int> gap_us(200, 1000);
-  for (int i = 0; i < samples; ++i) {
-    std::this_thread::sleep_for(std::chrono::microseconds(gap_us(random)));  // let the consumer fall asleep
-    const auto start = Clock::now();
-    client.SendEnvelope(request);
-    if (!client.ReceiveReply(reply, 1000ms)) break;
-    us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - start).count());
-  }
-  stop = true;
-  reader.Wake();
-  daemon.join();
-  region->Unlink();
-  const char* names[] = {"reply round trip in-process, consumer futex",
-                         "reply round trip in-process, consumer spin 20 us + futex",
-                         "reply round trip in-process, consumer polls every 1 ms"};
-  Print(names[consumer], us);
 }
 
 void AgainstDaemon(int samples, const std::string& width, const std::string& height) {
@@ -225,7 +170,6 @@ int main(int argc, char** argv) {
     if (flag == "--height") height = argv[i + 1];
   }
   for (auto spin : {0us, 20us, 100us, 3000us}) FrameWake(samples, spin);
-  for (int consumer = 0; consumer < 3; ++consumer) ReplyRoundTrip(samples, consumer);
   AgainstDaemon(samples, width, height);
   return 0;
 }

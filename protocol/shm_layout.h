@@ -1,11 +1,13 @@
-/* The byte layout of sim4cvd's POSIX shared-memory object (--shm-name): one
- * header, a ring of frame slots (one writer, lock-free readers, a seqlock per
- * slot), a reply ring from clients to the daemon and a per-client response
- * area. docs/protocol.md section 13 documents every byte and the protocols;
- * this header is the one definition the daemon and the C++ client share, and
- * it is plain C11 as well as C++ so other languages can be checked against it.
+/* The byte layout of sim4cvd's shared memory (--shm-name): a frame object
+ * (one header and a ring of frame slots: one writer, lock-free readers, a
+ * seqlock per slot) that clients can map only read-only, and one area per
+ * client (its request ring to the daemon and its response ring back), both
+ * memfds the daemon hands over a Unix socket. docs/protocol.md section 13
+ * documents every byte and the protocols; this header is the one definition
+ * the daemon and the C++ client share, and it is plain C11 as well as C++ so
+ * other languages can be checked against it.
  *
- * All integers and floats are little-endian (the object never leaves the
+ * All integers and floats are little-endian (the memory never leaves the
  * host); every struct has explicit padding and fixed offsets, asserted below.
  * Fields written while others read are accessed atomically (C11 atomics /
  * std::atomic_ref); the rest are written once at creation. */
@@ -28,22 +30,28 @@ namespace sim4cv::shm {
 /* ShmHeader.magic: these 8 ASCII bytes, no terminating NUL. */
 #define SIM4CV_SHM_MAGIC "SIM4CVSM"
 
-/* Bumped whenever any offset, size or protocol rule below changes. */
-SIM4CV_SHM_CONSTANT(kShmLayoutVersion, 1)
+/* Bumped whenever any offset, size or protocol rule below changes.
+ * 2: one read-only frame object plus one writable area per client, both
+ *    memfds handed over a Unix socket (the reply ring and response area of
+ *    version 1, which every client could write, are gone). */
+SIM4CV_SHM_CONSTANT(kShmLayoutVersion, 2)
 SIM4CV_SHM_CONSTANT(kShmHeaderBytes, 512)
 /* Frame slot: this many bytes of ShmFrameHeader region, then the pixels. */
 SIM4CV_SHM_CONSTANT(kShmFrameHeaderBytes, 8192)
 SIM4CV_SHM_CONSTANT(kShmMaxChannels, 4)
 SIM4CV_SHM_CONSTANT(kShmMaxBoxes, 128)
 SIM4CV_SHM_CONSTANT(kShmMaxEntities, 8)
-/* Reply ring (client -> daemon): fixed-size slots, one Envelope each. */
-SIM4CV_SHM_CONSTANT(kShmReplySlotBytes, 256)
-SIM4CV_SHM_CONSTANT(kShmReplyDataBytes, 232)
-/* Response area (daemon -> one client): entries of kShmResponseDepth messages. */
-SIM4CV_SHM_CONSTANT(kShmResponseEntryHeaderBytes, 64)
+/* A client's area: its header, its request ring (client -> daemon, one
+ * Envelope per slot) and its response ring (daemon -> client). */
+SIM4CV_SHM_CONSTANT(kShmAreaHeaderBytes, 256)
+SIM4CV_SHM_CONSTANT(kShmRequestSlotBytes, 256)
+SIM4CV_SHM_CONSTANT(kShmRequestDataBytes, 248)
+SIM4CV_SHM_CONSTANT(kShmRequestCapacity, 64)
 SIM4CV_SHM_CONSTANT(kShmResponseMessageBytes, 2048)
 SIM4CV_SHM_CONSTANT(kShmResponseDataBytes, 1984)
 SIM4CV_SHM_CONSTANT(kShmResponseDepth, 8)
+/* The attach message the daemon sends on the Unix socket. */
+SIM4CV_SHM_CONSTANT(kShmAttachBytes, 256)
 /* Every slot, entry and pixel plane starts on a multiple of this. */
 SIM4CV_SHM_CONSTANT(kShmAlignment, 64)
 /* Pixel channels (proto Channel) and their bits in the channel masks. */
@@ -53,9 +61,14 @@ SIM4CV_SHM_CONSTANT(kShmChannelMask, 3)
 /* (1 << RGB) | (1 << DEPTH) | (1 << MASK): a ring carrying every pixel channel. */
 SIM4CV_SHM_CONSTANT(kShmAllPixelChannels, 0x0e)
 
-/* The object starts with this header (512 bytes). Lines of 64 bytes group
- * fields by writer so that readers polling one line do not share it with
- * another writer. */
+/* ShmAreaHeader.magic and ShmAttach.magic. */
+#define SIM4CV_SHM_AREA_MAGIC "SIM4CVCA"
+#define SIM4CV_SHM_ATTACH_MAGIC "SIM4CVAT"
+
+/* The frame object starts with this header (512 bytes). Clients can map the
+ * object only read-only (it is sealed with F_SEAL_FUTURE_WRITE): every field
+ * is written by the daemon. Lines of 64 bytes group fields by how often they
+ * change. */
 typedef struct ShmHeader {
   /* Line 0: written once at creation. */
   char magic[8];               /*   0: SIM4CV_SHM_MAGIC */
@@ -72,45 +85,25 @@ typedef struct ShmHeader {
   uint32_t max_boxes;          /*  60: kShmMaxBoxes */
   /* Line 1: written once at creation. */
   char camera_name[32];        /*  64: NUL-terminated, the camera of the frames */
-  uint64_t reply_offset;       /*  96: offset of reply slot 0 */
-  uint32_t reply_capacity;     /* 104: reply slots */
-  uint32_t reply_slot_bytes;   /* 108: kShmReplySlotBytes */
-  uint64_t response_offset;    /* 112: offset of response entry 0 */
-  uint32_t response_entries;   /* 120: entries (most shm clients at once) */
-  uint32_t response_depth;     /* 124: kShmResponseDepth */
+  uint8_t reserved1[32];       /*  96 */
   /* Line 2: written once at creation. */
-  uint32_t response_message_bytes; /* 128: kShmResponseMessageBytes */
+  uint32_t reserved2a;         /* 128 */
   uint32_t max_entities;       /* 132: kShmMaxEntities */
   uint32_t expiry_ms;          /* 136: a client silent this long is disconnected */
   uint32_t protocol_version;   /* 140: the Envelope protocol version (Hello) */
-  uint64_t response_entry_bytes; /* 144: bytes per response entry */
-  /* Bit (1 << channel) per pixel channel the slots carry (--shm-channels);
-   * kShmAllPixelChannels by default. 0 in objects from daemons that predate
-   * the field: they always carried all three. */
+  uint64_t reserved2b;         /* 144 */
+  /* Bit (1 << channel) per pixel channel the slots carry (--shm-channels). */
   uint32_t channel_mask;       /* 152 */
   uint8_t reserved2[36];       /* 156 */
   /* Line 3: the frame writer (the daemon's sim thread). */
   uint64_t published;          /* 192: frames published; the newest is in slot (published-1) % slot_count */
   uint64_t newest_frame_id;    /* 200: frame_id of that frame (0: none yet) */
   uint32_t frame_futex;        /* 208: +1 per published frame; readers FUTEX_WAIT on it */
-  uint32_t frame_waiters;      /* 212: readers inside FUTEX_WAIT (the writer skips FUTEX_WAKE at 0) */
+  uint32_t reserved3a;         /* 212 */
   uint32_t closed;             /* 216: 1 once the daemon stopped: no more frames or responses */
   uint8_t reserved3[36];       /* 220 */
-  /* Line 4: reply ring producers (clients). */
-  uint64_t reply_write;        /* 256: tickets taken; fetch_add 1 reserves a reply slot */
-  uint32_t reply_futex;        /* 264: +1 per completed reply; the daemon FUTEX_WAITs on it */
-  uint32_t reply_sleeping;     /* 268: 1 while the daemon is (about to be) in FUTEX_WAIT */
-  uint8_t reserved4[48];       /* 272 */
-  /* Line 5: reply ring consumer (the daemon). */
-  uint64_t reply_read;         /* 320: next ticket the daemon reads */
-  uint64_t replies_dropped;    /* 328: replies overwritten before the daemon read them */
-  uint8_t reserved5[48];       /* 336 */
-  /* Line 6: response area (the daemon). */
-  uint32_t response_futex;     /* 384: +1 per response written or entry freed */
-  uint32_t response_waiters;   /* 388: clients inside FUTEX_WAIT on response_futex */
-  uint8_t reserved6[56];       /* 392 */
-  /* Line 7. */
-  uint8_t reserved7[64];       /* 448 */
+  /* Lines 4 to 7. */
+  uint8_t reserved4[256];      /* 256 */
 } ShmHeader;
 
 /* One pixel channel of a frame slot. */
@@ -167,47 +160,71 @@ typedef struct ShmFrameHeader {
   uint8_t reserved1[2944];     /* 5248 */
 } ShmFrameHeader;
 
-/* One client -> daemon message (256 bytes). state encodes the ticket n it
- * holds: 0 never used, 2n+1 being written, 2n+2 complete. */
-typedef struct ShmReplySlot {
-  uint64_t state;      /*  0 */
-  uint64_t token;      /*  8: the sender's client token (non-zero) */
-  uint32_t size;       /* 16: bytes of data used (<= kShmReplyDataBytes) */
-  uint32_t checksum;   /* 20: FNV-1a 32 over token (8 bytes LE), size (4 bytes LE), data[0..size) */
-  uint8_t data[232];   /* 24: one serialized Envelope */
-} ShmReplySlot;
+/* The start of a client's area (256 bytes): one per attached client, mapped
+ * read-write by that client and by the daemon, which never reads its
+ * layout back from it (docs/protocol.md 13.5). */
+typedef struct ShmAreaHeader {
+  /* Line 0: written once by the daemon. */
+  char magic[8];                   /*   0: SIM4CV_SHM_AREA_MAGIC */
+  uint32_t layout_version;         /*   8: kShmLayoutVersion */
+  uint32_t header_bytes;           /*  12: kShmAreaHeaderBytes */
+  uint64_t total_bytes;            /*  16: size of the area */
+  uint64_t request_offset;         /*  24: offset of request slot 0 */
+  uint32_t request_capacity;       /*  32: kShmRequestCapacity */
+  uint32_t request_slot_bytes;     /*  36: kShmRequestSlotBytes */
+  uint64_t response_offset;        /*  40: offset of response message 0 */
+  uint32_t response_depth;         /*  48: kShmResponseDepth */
+  uint32_t response_message_bytes; /*  52: kShmResponseMessageBytes */
+  uint8_t reserved0[8];            /*  56 */
+  /* Line 1: the client. */
+  uint64_t request_write;          /*  64: requests written; request n is in slot n % request_capacity */
+  uint8_t reserved1[56];           /*  72 */
+  /* Line 2: the daemon. */
+  uint64_t request_read;           /* 128: requests the daemon has taken (their slots are free again) */
+  uint64_t responses_written;      /* 136: response k is in message k % response_depth */
+  uint32_t response_futex;         /* 144: +1 per response written (and when the area is closed) */
+  uint32_t closed;                 /* 148: 1 once the daemon ended this client's attachment */
+  uint8_t reserved2[40];           /* 152 */
+  /* Line 3. */
+  uint8_t reserved3[64];           /* 192 */
+} ShmAreaHeader;
 
-/* Start of a response entry; kShmResponseDepth ShmResponseMessages follow. */
-typedef struct ShmResponseEntry {
-  uint64_t token;       /*  0: owning client's token; 0 while free */
-  uint64_t written;     /*  8: responses written since the entry was assigned */
-  uint32_t generation;  /* 16: +1 each time the entry is assigned */
-  uint8_t reserved[44]; /* 20 */
-} ShmResponseEntry;
+/* One client -> daemon request (256 bytes). */
+typedef struct ShmRequestSlot {
+  uint32_t size;       /*  0: bytes of data used (<= kShmRequestDataBytes) */
+  uint32_t reserved;   /*  4 */
+  uint8_t data[248];   /*  8: one serialized Envelope */
+} ShmRequestSlot;
 
 /* One daemon -> client response (2048 bytes). */
 typedef struct ShmResponseMessage {
-  uint64_t sequence;     /*  0: seqlock: odd while written */
-  uint64_t index;        /*  8: which response of the entry (0, 1, ...) */
-  uint32_t size;         /* 16: bytes of data used */
-  uint8_t reserved[44];  /* 20 */
+  uint64_t sequence;     /*  0: 2k+1 while response k is written, 2k+2 once complete */
+  uint32_t size;         /*  8: bytes of data used */
+  uint8_t reserved[52];  /* 12 */
   uint8_t data[1984];    /* 64: one serialized Envelope */
 } ShmResponseMessage;
+
+/* The one message the daemon sends on a client's Unix socket (256 bytes).
+ * With status 0 it carries three descriptors (SCM_RIGHTS): the frame
+ * object, the client's area and its doorbell (an eventfd). */
+typedef struct ShmAttach {
+  char magic[8];           /*   0: SIM4CV_SHM_ATTACH_MAGIC */
+  uint32_t layout_version; /*   8: kShmLayoutVersion */
+  uint32_t status;         /*  12: 0 attached; 1 refused (no descriptors; see message) */
+  uint64_t frames_bytes;   /*  16: size of the frame object */
+  uint64_t area_bytes;     /*  24: size of the client's area */
+  char message[224];       /*  32: NUL-terminated reason when refused */
+} ShmAttach;
 
 SIM4CV_SHM_STATIC_ASSERT(sizeof(double) == 8 && sizeof(float) == 4, "IEEE-754 binary64/binary32 expected");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmHeader) == 512, "ShmHeader is 512 bytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, camera_name) == 64, "ShmHeader line 1");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_message_bytes) == 128, "ShmHeader line 2");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_entry_bytes) == 144, "ShmHeader.response_entry_bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, max_entities) == 132, "ShmHeader.max_entities");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, channel_mask) == 152, "ShmHeader.channel_mask");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, published) == 192, "ShmHeader line 3");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, frame_futex) == 208, "ShmHeader.frame_futex");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, closed) == 216, "ShmHeader.closed");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reply_write) == 256, "ShmHeader line 4");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reply_futex) == 264, "ShmHeader.reply_futex");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reply_read) == 320, "ShmHeader line 5");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, response_futex) == 384, "ShmHeader line 6");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reserved7) == 448, "ShmHeader line 7");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reserved4) == 256, "ShmHeader line 4");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmChannel) == 32, "ShmChannel is 32 bytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmChannel, offset) == 16, "ShmChannel.offset");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmBox) == 32, "ShmBox is 32 bytes");
@@ -225,16 +242,21 @@ SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, channels) == 128, "ShmFrameHea
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, boxes) == 256, "ShmFrameHeader.boxes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, entities) == 4352, "ShmFrameHeader.entities");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, reserved1) == 5248, "ShmFrameHeader.reserved1");
-SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmReplySlot) == 256, "ShmReplySlot is kShmReplySlotBytes");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmReplySlot, data) == 24, "ShmReplySlot.data");
-SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmResponseEntry) == 64, "ShmResponseEntry is kShmResponseEntryHeaderBytes");
+
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmAreaHeader) == 256, "ShmAreaHeader is kShmAreaHeaderBytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAreaHeader, request_write) == 64, "ShmAreaHeader line 1");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAreaHeader, request_read) == 128, "ShmAreaHeader line 2");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAreaHeader, response_futex) == 144, "ShmAreaHeader.response_futex");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAreaHeader, closed) == 148, "ShmAreaHeader.closed");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmRequestSlot) == 256, "ShmRequestSlot is kShmRequestSlotBytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmRequestSlot, data) == 8, "ShmRequestSlot.data");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmResponseMessage) == 2048, "ShmResponseMessage is kShmResponseMessageBytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmResponseMessage, data) == 64, "ShmResponseMessage.data");
+SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmAttach) == 256, "ShmAttach is kShmAttachBytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAttach, message) == 32, "ShmAttach.message");
 
 #ifdef __cplusplus
 static_assert(kShmMaxChannels == 4 && kShmMaxBoxes == 128 && kShmMaxEntities == 8, "array sizes above");
-static_assert(kShmReplyDataBytes == sizeof(ShmReplySlot::data), "reply data size");
-static_assert(kShmResponseDataBytes == sizeof(ShmResponseMessage::data), "response data size");
 }  // namespace sim4cv::shm
 #endif
 

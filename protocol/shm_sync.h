@@ -1,7 +1,10 @@
 // C++ helpers over protocol/shm_layout.h shared by the daemon and the C++
 // client: atomic access to the plain fields, the cross-process futex calls,
-// the reply checksum, the object's geometry and typed accessors. The rules
-// they implement are in docs/protocol.md section 13.
+// the geometry of the frame object and of a client's area, the socket
+// address, and typed accessors that compute every address from a geometry
+// the caller holds itself, never from fields read back out of shared memory
+// (which another process may have changed). The rules they implement are in
+// docs/protocol.md section 13.
 #pragma once
 
 #include <linux/futex.h>
@@ -9,6 +12,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <ctime>
 #include <string>
@@ -37,28 +41,21 @@ inline void FutexWait(uint32_t& word, uint32_t expected, int64_t timeout_ns) {
 // Wakes up to `count` processes waiting on `word`.
 inline void FutexWake(uint32_t& word, int count) { syscall(SYS_futex, &word, FUTEX_WAKE, count, nullptr, nullptr, 0); }
 
-// Bumps a futex word and wakes every waiter if `waiters` (or `sleeping`) says
-// someone may be in FUTEX_WAIT. The seq_cst pair with the waiter's
-// "announce, then re-read the word" means a wake-up is never lost.
-inline void BumpAndWake(uint32_t& word, uint32_t& waiters) {
-  Atomic(word).fetch_add(1, std::memory_order_seq_cst);
-  if (Atomic(waiters).load(std::memory_order_seq_cst) != 0) FutexWake(word, 0x7fffffff);
+// Bumps a futex word the caller alone writes (its own count, never read back)
+// and wakes every waiter. Waking unconditionally costs one system call but
+// trusts no waiter count that another process could have zeroed.
+inline void StoreAndWake(uint32_t& word, uint32_t value) {
+  Atomic(word).store(value, std::memory_order_seq_cst);
+  FutexWake(word, 0x7fffffff);
 }
 
-// ShmReplySlot.state of a slot holding ticket `ticket`.
-constexpr uint64_t ReplyWritingState(uint64_t ticket) { return 2 * ticket + 1; }
-constexpr uint64_t ReplyCompleteState(uint64_t ticket) { return 2 * ticket + 2; }
-constexpr uint64_t ReplyTicketOf(uint64_t state) { return (state - 1) / 2; }  // state != 0
-
-// FNV-1a 32 over token (8 bytes LE), size (4 bytes LE) and data[0..size).
-inline uint32_t ReplyChecksum(uint64_t token, const uint8_t* data, uint32_t size) {
-  uint32_t hash = 2166136261u;
-  auto mix = [&hash](uint8_t byte) { hash = (hash ^ byte) * 16777619u; };
-  for (int i = 0; i < 8; ++i) mix(static_cast<uint8_t>(token >> (8 * i)));
-  for (int i = 0; i < 4; ++i) mix(static_cast<uint8_t>(size >> (8 * i)));
-  for (uint32_t i = 0; i < size; ++i) mix(data[i]);
-  return hash;
-}
+// The Unix socket a daemon serving --shm-name NAME ("/name") listens on: in
+// the abstract namespace (no file; it disappears with the daemon), this
+// prefix then NAME. sockaddr_un.sun_path holds it from its first byte, a NUL.
+inline constexpr char kShmSocketPrefix[] = "sim4cv-shm";
+// The longest NAME (with its '/') that fits in sun_path (108 bytes).
+inline constexpr std::size_t kShmMaxNameBytes = 107 - (sizeof kShmSocketPrefix - 1);
+inline std::string SocketPath(const std::string& name) { return std::string(1, '\0') + kShmSocketPrefix + name; }
 
 constexpr uint64_t AlignUp(uint64_t value, uint64_t alignment) {
   return (value + alignment - 1) / alignment * alignment;
@@ -85,18 +82,20 @@ inline std::string ChannelFlagValue(uint32_t channel_mask) {
   return value;
 }
 
-// Where everything lives in an object with the given parameters. A slot holds
-// only the planes of `channel_mask`, packed in the order RGB, DEPTH, MASK:
-// smaller slots are less to copy past and more of them stay in cache.
+// Where everything lives in the frame object with the given parameters. A
+// slot holds only the planes of `channel_mask`, packed in the order RGB,
+// DEPTH, MASK: smaller slots are less to copy past and more of them stay in
+// cache.
 struct Geometry {
   uint64_t rgb_offset = 0, depth_offset = 0, mask_offset = 0;  // within a slot; 0: channel absent
   uint64_t slot_bytes = 0;
-  uint64_t slots_offset = 0, reply_offset = 0, response_offset = 0, response_entry_bytes = 0;
+  uint32_t slot_count = 0;
+  uint64_t slots_offset = 0;
   uint64_t total_bytes = 0;
 };
 
-inline Geometry ComputeGeometry(uint32_t width, uint32_t height, uint32_t slot_count, uint32_t reply_capacity,
-                                uint32_t response_entries, uint32_t channel_mask = kShmAllPixelChannels) {
+inline Geometry ComputeGeometry(uint32_t width, uint32_t height, uint32_t slot_count,
+                                uint32_t channel_mask = kShmAllPixelChannels) {
   const uint64_t pixels = static_cast<uint64_t>(width) * height;
   uint64_t end = kShmFrameHeaderBytes;
   auto place = [&](uint32_t channel, uint64_t bytes_per_pixel) -> uint64_t {
@@ -110,35 +109,57 @@ inline Geometry ComputeGeometry(uint32_t width, uint32_t height, uint32_t slot_c
   g.depth_offset = place(kShmChannelDepth, 4);
   g.mask_offset = place(kShmChannelMask, 2);
   g.slot_bytes = AlignUp(end, 4096);
+  g.slot_count = slot_count;
   g.slots_offset = 4096;
-  g.reply_offset = g.slots_offset + g.slot_bytes * slot_count;
-  g.response_offset = g.reply_offset + static_cast<uint64_t>(kShmReplySlotBytes) * reply_capacity;
-  g.response_entry_bytes =
-      kShmResponseEntryHeaderBytes + static_cast<uint64_t>(kShmResponseDepth) * kShmResponseMessageBytes;
-  g.total_bytes = AlignUp(g.response_offset + g.response_entry_bytes * response_entries, 4096);
+  g.total_bytes = g.slots_offset + g.slot_bytes * slot_count;
   return g;
 }
 
-// Typed access to a mapped object whose header has been validated.
-class Mapped {
+// A client's area: the same for every client and every daemon of this layout version.
+inline constexpr uint64_t kAreaRequestOffset = kShmAreaHeaderBytes;
+inline constexpr uint64_t kAreaResponseOffset =
+    kAreaRequestOffset + static_cast<uint64_t>(kShmRequestCapacity) * kShmRequestSlotBytes;
+inline constexpr uint64_t kAreaBytes =
+    AlignUp(kAreaResponseOffset + static_cast<uint64_t>(kShmResponseDepth) * kShmResponseMessageBytes, 4096);
+
+// Response k's sequence word while it is written and once it is complete.
+constexpr uint64_t ResponseWritingSequence(uint64_t k) { return 2 * k + 1; }
+constexpr uint64_t ResponseCompleteSequence(uint64_t k) { return 2 * k + 2; }
+
+// Typed access to a mapped frame object, by a geometry the holder computed
+// or validated itself.
+class FrameMap {
  public:
-  Mapped() = default;
-  explicit Mapped(void* base) : base_(static_cast<uint8_t*>(base)) {}
+  FrameMap() = default;
+  FrameMap(void* base, const Geometry& geometry) : base_(static_cast<uint8_t*>(base)), geometry_(geometry) {}
 
   uint8_t* base() const { return base_; }
+  const Geometry& geometry() const { return geometry_; }
   ShmHeader& header() const { return *reinterpret_cast<ShmHeader*>(base_); }
-  uint8_t* slot_bytes(uint64_t slot) const { return base_ + header().slots_offset + slot * header().slot_bytes; }
+  // Slot `publication - 1`'s bytes for any publication number: always inside the object.
+  uint8_t* slot_bytes(uint64_t slot) const {
+    return base_ + geometry_.slots_offset + (slot % geometry_.slot_count) * geometry_.slot_bytes;
+  }
   ShmFrameHeader& slot(uint64_t slot) const { return *reinterpret_cast<ShmFrameHeader*>(slot_bytes(slot)); }
-  ShmReplySlot& reply_slot(uint64_t ticket) const {
-    return reinterpret_cast<ShmReplySlot*>(base_ + header().reply_offset)[ticket % header().reply_capacity];
+
+ private:
+  uint8_t* base_ = nullptr;
+  Geometry geometry_;
+};
+
+// Typed access to a mapped client area (its geometry is fixed: kAreaBytes).
+class AreaMap {
+ public:
+  AreaMap() = default;
+  explicit AreaMap(void* base) : base_(static_cast<uint8_t*>(base)) {}
+
+  uint8_t* base() const { return base_; }
+  ShmAreaHeader& header() const { return *reinterpret_cast<ShmAreaHeader*>(base_); }
+  ShmRequestSlot& request(uint64_t n) const {
+    return reinterpret_cast<ShmRequestSlot*>(base_ + kAreaRequestOffset)[n % kShmRequestCapacity];
   }
-  ShmResponseEntry& response_entry(uint32_t entry) const {
-    return *reinterpret_cast<ShmResponseEntry*>(base_ + header().response_offset +
-                                                entry * header().response_entry_bytes);
-  }
-  ShmResponseMessage& response_message(uint32_t entry, uint64_t index) const {
-    auto* first = reinterpret_cast<uint8_t*>(&response_entry(entry)) + kShmResponseEntryHeaderBytes;
-    return reinterpret_cast<ShmResponseMessage*>(first)[index % header().response_depth];
+  ShmResponseMessage& response(uint64_t k) const {
+    return reinterpret_cast<ShmResponseMessage*>(base_ + kAreaResponseOffset)[k % kShmResponseDepth];
   }
 
  private:

@@ -119,5 +119,20 @@ inline constexpr uint32_t kAcceptErrorLogIntervalMs = 10000;
 // --- frames held for clients ---
 
 // --- shared memory ---
+// The request ring, response ring and message sizes of a client's area are
+// layout constants (protocol/shm_layout.h: kShmRequestCapacity 64 requests of
+// at most kShmRequestDataBytes 248 bytes, kShmResponseDepth 8 responses of at
+// most 1984 bytes), the same for every daemon of a layout version.
+
+// Shared-memory clients attached at once; more are refused with the reason
+// (counter shm.refused). Each holds a 36 KiB area, a socket and an eventfd in
+// the daemon: 64 of them are 2.3 MiB and 128 descriptors.
+inline constexpr uint32_t kShmMaxClients = 64;
+// Requests the shm thread takes from one client before it serves the next:
+// one ring's worth, so a client that floods its ring delays no one else.
+inline constexpr uint32_t kShmRequestsPerTurn = 64;
+// After accept() fails for lack of descriptors, the shm listener rests this
+// long instead of waking its thread again at once for the same connection.
+inline constexpr uint32_t kShmAcceptRestMs = 100;
 
 }  // namespace sim4cv::limits

@@ -107,7 +107,7 @@ Usage: sim4cvd [flags]
   --udp-datagram-bytes N    largest datagram the daemon sends; frames are chunked to fit
                             (default 65000 for loopback; 1472 for a 1500-byte MTU network)
   --udp-expiry-ms N         a UDP client's registration lapses after this much silence (default 5000)
-  --shm-name NAME           serve frames through the POSIX shared-memory object /NAME (default: off)
+  --shm-name NAME           serve shared memory to clients attaching through @sim4cv-shm/NAME (default: off)
   --shm-camera NAME         the camera the shared-memory ring carries (default uav)
   --shm-slots N             frame slots in the shared-memory ring (default 8)
   --shm-expiry-ms N         a shared-memory client silent this long is disconnected (default 5000)

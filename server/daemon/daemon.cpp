@@ -72,7 +72,7 @@ int RunDaemon(const Config& config) {
     SIM4CV_THROW_UNLESS(shm_camera >= 0,
                         "--shm-camera '" << config.shm_camera << "' is not a camera of scene '" << scene.name << "'");
     const auto& camera = scene.cameras[static_cast<std::size_t>(shm_camera)];
-    transport::ShmOptions shm{config.shm_name, config.shm_camera, config.shm_slots, 256};
+    transport::ShmOptions shm{config.shm_name, config.shm_camera, config.shm_slots};
     shm.width = camera.width;
     shm.height = camera.height;
     shm.expiry_ms = config.shm_expiry_ms;

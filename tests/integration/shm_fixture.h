@@ -2,7 +2,6 @@
 // test process, plus helpers shared by the shm integration tests.
 #pragma once
 
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -20,7 +19,6 @@ class ShmDaemonTest : public DaemonTest {
     static int counter = 0;
     shm_name_ = "/sim4cv-it-" + std::to_string(getpid()) + "-" + std::to_string(++counter);
   }
-  ~ShmDaemonTest() override { shm_unlink(shm_name_.c_str()); }  // in case the daemon was killed
 
   void StartShmDaemon(std::vector<std::string> args = {}) {
     args.insert(args.end(), {"--shm-name", shm_name_});

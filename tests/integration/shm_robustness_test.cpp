@@ -1,7 +1,8 @@
 // The shared-memory transport when clients misbehave or vanish: readers that
-// die mid-read or never release a view, lockstep clients that go silent,
-// refused messages; and the object's life cycle (removed on SIGTERM, a stale
-// one replaced at start).
+// die mid-read or never release a view, lockstep clients that go silent or
+// die, refused messages; and the life cycle (the ring closed and the socket
+// gone on SIGTERM, a second daemon with the same name refused at start).
+// Hostile clients: shm_hostile_test.cpp.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -47,7 +48,7 @@ TEST_F(ShmDaemonTest, ReadersThatDieMidReadDoNotAffectTheDaemon) {
     _exit(0);  // no Release, no Close
   });
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "child status " << status;
-  // Another is killed while it sleeps in WaitForFrame (it leaves frame_waiters raised).
+  // Another is killed while it sleeps in WaitForFrame.
   const pid_t waiter = fork();
   if (waiter == 0) {
     ShmClient child;
@@ -114,7 +115,13 @@ TEST_F(ShmDaemonTest, SilentLockstepClientIsDisconnected) {
   EXPECT_GE(waited, 400ms);
   EXPECT_LT(waited, 3000ms);
   EXPECT_EQ(Counter(*tcp, "shm.clients_expired"), 1u);
+  // Its last response says why; then the attachment is over.
   proto::Envelope reply;
+  ASSERT_TRUE(shm->ReceiveReply(reply, 1000ms));
+  ASSERT_TRUE(reply.has_error()) << reply.DebugString();
+  EXPECT_TRUE(reply.error().fatal());
+  EXPECT_NE(reply.error().message().find("--shm-expiry-ms"), std::string::npos) << reply.error().message();
+  EXPECT_FALSE(shm->attached());
   EXPECT_THROW(shm->ReceiveReply(reply, 1000ms), ConnectionError);
   // It may come back with a new Hello.
   EXPECT_GT(shm->Hello("back").client_id(), 0u);
@@ -152,36 +159,75 @@ TEST_F(ShmDaemonTest, RefusalsComeBackThroughTheResponseArea) {
   EXPECT_TRUE(reply.error().fatal());
 }
 
-TEST_F(ShmDaemonTest, ObjectIsRemovedOnSigterm) {
+// A lockstep client that dies holds nobody back: the daemon learns it from
+// its socket at once, long before --shm-expiry-ms.
+TEST_F(ShmDaemonTest, LockstepClientThatDiesIsForgottenAtOnce) {
+  StartShmDaemon({"--shm-expiry-ms", "60000"});
+  auto tcp = Connect("tcp-lockstep");
+  tcp->Subscribe("uav", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    ShmClient shm;
+    shm.Open(shm_name_);
+    shm.Hello("dies");
+    shm.Subscribe(proto::DELIVERY_LOCKSTEP);
+    [[maybe_unused]] const auto n = write(ready[1], "x", 1);
+    pause();  // holds the simulation until killed
+    _exit(0);
+  }
+  char byte;
+  ASSERT_EQ(read(ready[0], &byte, 1), 1);
+  tcp->Step();
+  proto::Frame frame;
+  EXPECT_FALSE(tcp->ReceiveFrame(frame, 300ms)) << "the shm lockstep client has not stepped";
+  const auto start = std::chrono::steady_clock::now();
+  kill(child, SIGKILL);
+  waitpid(child, nullptr, 0);
+  ASSERT_TRUE(tcp->ReceiveFrame(frame, 10000ms));
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 5000ms) << "not the 60 s expiry";
+  EXPECT_EQ(Counter(*tcp, "shm.clients_expired"), 0u);
+  close(ready[0]);
+  close(ready[1]);
+}
+
+TEST_F(ShmDaemonTest, RingIsClosedAndNameFreedOnSigterm) {
   StartShmDaemon();
   auto shm = OpenShm();
+  shm->Hello("stays");
   EXPECT_FALSE(shm->closed());
   EXPECT_EQ(daemon_->Stop(), 0) << daemon_->stderr_text();
   daemon_.reset();
   EXPECT_TRUE(shm->closed()) << "the daemon marks the ring closed before it goes";
+  EXPECT_FALSE(shm->attached());
   EXPECT_THROW(shm->WaitForFrame(0, 1000ms), ConnectionError);
-  const int fd = shm_open(shm_name_.c_str(), O_RDONLY, 0);
-  EXPECT_LT(fd, 0) << shm_name_ << " still exists after SIGTERM";
-  EXPECT_EQ(errno, ENOENT);
-  if (fd >= 0) close(fd);
+  ShmClient late;
+  try {
+    late.Open(shm_name_);
+    ADD_FAILURE() << "attached to a daemon that stopped";
+  } catch (const ShmError& error) {
+    EXPECT_NE(std::string(error.what()).find("no sim4cvd serves shared memory under " + shm_name_),
+              std::string::npos)
+        << error.what();
+  }
+  // The name is free again: a new daemon takes it.
+  StartShmDaemon();
+  EXPECT_NO_THROW(OpenShm()->Hello("next"));
 }
 
-TEST_F(ShmDaemonTest, StaleObjectIsReplacedAtStart) {
-  const int fd = shm_open(shm_name_.c_str(), O_CREAT | O_RDWR | O_TRUNC, 0600);
-  ASSERT_GE(fd, 0);
-  const std::string garbage(10000, '\x5a');
-  ASSERT_EQ(write(fd, garbage.data(), garbage.size()), static_cast<ssize_t>(garbage.size()));
-  close(fd);
-  {
-    ShmClient client;
-    EXPECT_THROW(client.Open(shm_name_), ShmError);
+TEST_F(ShmDaemonTest, SecondDaemonWithTheSameNameIsRefusedAtStart) {
+  StartShmDaemon();
+  try {
+    DaemonProcess second({"--shm-name", shm_name_});
+    ADD_FAILURE() << "a second daemon started with the same --shm-name";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("another sim4cvd serves this --shm-name"), std::string::npos)
+        << error.what();
   }
-  StartShmDaemon({"--mode", "realtime"});
   auto shm = OpenShm();
-  EXPECT_EQ(shm->header().writer_pid, static_cast<uint32_t>(daemon_->pid()));
-  ASSERT_TRUE(shm->WaitForFrame(0, 5000ms)) << "realtime: the ring's own subscription renders every frame";
-  EXPECT_NE(daemon_->stderr_text().find("replaced the stale shared-memory object " + shm_name_), std::string::npos)
-      << daemon_->stderr_text();
+  EXPECT_EQ(shm->header().writer_pid, static_cast<uint32_t>(daemon_->pid())) << "the first still serves it";
+  EXPECT_GT(shm->Hello("first").client_id(), 0u);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@ sim4cv_test(integration udp_test sim4cv_client)
 sim4cv_test(integration udp_bad_input_test sim4cv_client)
 sim4cv_test(integration shm_test sim4cv_client)
 sim4cv_test(integration shm_robustness_test sim4cv_client)
+sim4cv_test(integration shm_hostile_test sim4cv_client)
 sim4cv_test(integration map_scene_test sim4cv_client)
 target_compile_definitions(map_scene_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOURCE_DIR}")  # finds scenes/
 sim4cv_test(integration run_log_daemon_test sim4cv_client sim4cv_runlog)

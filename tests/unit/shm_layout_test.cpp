@@ -1,19 +1,22 @@
 // Unit tests of the shared-memory layout (protocol/shm_layout.h, shm_sync.h)
-// and of the header the daemon writes (server/transport/shm/shm_region.*):
-// the offsets docs/protocol.md section 13 documents, the geometry rules, the
-// reply checksum's test vectors, and the errors a client gives for an object
-// that is missing, foreign, or of another layout version.
+// and of what the daemon creates (server/transport/shm/shm_region.*,
+// shm_client_area.*): the offsets docs/protocol.md section 13 documents, the
+// geometry rules, the seals, and the errors a client gives for a name nobody
+// serves, a foreign answer, or another layout version.
 #include <fcntl.h>
 #include <gtest/gtest.h>
-#include <sys/mman.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <cstddef>
 #include <cstring>
 #include <string>
-#include <vector>
+#include <thread>
 
 #include "protocol/shm_sync.h"
+#include "server/transport/shm/shm_client_area.h"
+#include "server/transport/shm/shm_listener.h"
 #include "server/transport/shm/shm_region.h"
 #include "sim4cv/shm_client.h"
 #include "tests/support/no_warnings.h"
@@ -25,27 +28,25 @@ namespace {
 static_assert(offsetof(ShmHeader, magic) == 0 && offsetof(ShmHeader, layout_version) == 8);
 static_assert(offsetof(ShmHeader, slot_count) == 24 && offsetof(ShmHeader, slot_bytes) == 32);
 static_assert(offsetof(ShmHeader, camera_width) == 48 && offsetof(ShmHeader, writer_pid) == 56);
-static_assert(offsetof(ShmHeader, reply_offset) == 96 && offsetof(ShmHeader, reply_capacity) == 104);
-static_assert(offsetof(ShmHeader, response_offset) == 112 && offsetof(ShmHeader, response_entries) == 120);
 static_assert(offsetof(ShmHeader, expiry_ms) == 136 && offsetof(ShmHeader, protocol_version) == 140);
 static_assert(offsetof(ShmHeader, channel_mask) == 152 && kShmAllPixelChannels == 0x0e);
-static_assert(offsetof(ShmHeader, newest_frame_id) == 200 && offsetof(ShmHeader, frame_waiters) == 212);
-static_assert(offsetof(ShmHeader, reply_sleeping) == 268 && offsetof(ShmHeader, replies_dropped) == 328);
-static_assert(offsetof(ShmHeader, response_waiters) == 388);
+static_assert(offsetof(ShmHeader, newest_frame_id) == 200 && offsetof(ShmHeader, closed) == 216);
 static_assert(offsetof(ShmFrameHeader, publication) == 8 && offsetof(ShmFrameHeader, frame_id) == 16);
 static_assert(offsetof(ShmFrameHeader, render_end_mono_ns) == 32 && offsetof(ShmFrameHeader, channel_mask) == 48);
 static_assert(offsetof(ShmFrameHeader, box_count) == 56 && offsetof(ShmFrameHeader, entity_count) == 64);
-static_assert(offsetof(ShmReplySlot, token) == 8 && offsetof(ShmReplySlot, size) == 16);
-static_assert(offsetof(ShmReplySlot, checksum) == 20);
-static_assert(offsetof(ShmResponseEntry, written) == 8 && offsetof(ShmResponseEntry, generation) == 16);
-static_assert(offsetof(ShmResponseMessage, index) == 8 && offsetof(ShmResponseMessage, size) == 16);
-// Every field the two sides touch concurrently is naturally aligned for atomics.
-static_assert(offsetof(ShmHeader, published) % 8 == 0 && offsetof(ShmHeader, reply_write) % 8 == 0);
-static_assert(offsetof(ShmHeader, frame_futex) % 4 == 0 && offsetof(ShmHeader, reply_futex) % 4 == 0);
+static_assert(offsetof(ShmAreaHeader, total_bytes) == 16 && offsetof(ShmAreaHeader, request_offset) == 24);
+static_assert(offsetof(ShmAreaHeader, request_capacity) == 32 && offsetof(ShmAreaHeader, response_offset) == 40);
+static_assert(offsetof(ShmAreaHeader, response_depth) == 48 && offsetof(ShmAreaHeader, responses_written) == 136);
+static_assert(offsetof(ShmRequestSlot, size) == 0 && offsetof(ShmResponseMessage, size) == 8);
+static_assert(offsetof(ShmAttach, status) == 12 && offsetof(ShmAttach, frames_bytes) == 16);
+// Every field two processes touch concurrently is naturally aligned for atomics.
+static_assert(offsetof(ShmHeader, published) % 8 == 0 && offsetof(ShmHeader, frame_futex) % 4 == 0);
+static_assert(offsetof(ShmAreaHeader, request_write) % 8 == 0 && offsetof(ShmAreaHeader, request_read) % 8 == 0);
+static_assert(offsetof(ShmAreaHeader, response_futex) % 4 == 0);
 
 TEST(ShmLayout, GeometryAlignsSlotsAndPlanes) {
   for (auto [w, h] : {std::pair{320u, 180u}, {17u, 19u}, {1280u, 720u}, {16u, 16u}}) {
-    const Geometry g = ComputeGeometry(w, h, 8, 256, 64);
+    const Geometry g = ComputeGeometry(w, h, 8);
     const uint64_t pixels = static_cast<uint64_t>(w) * h;
     EXPECT_EQ(g.rgb_offset, kShmFrameHeaderBytes);
     EXPECT_EQ(g.depth_offset % kShmAlignment, 0u);
@@ -55,102 +56,74 @@ TEST(ShmLayout, GeometryAlignsSlotsAndPlanes) {
     EXPECT_GE(g.slot_bytes, g.mask_offset + pixels * 2);
     EXPECT_EQ(g.slot_bytes % 4096, 0u);
     EXPECT_EQ(g.slots_offset, 4096u);
-    EXPECT_EQ(g.reply_offset, g.slots_offset + 8 * g.slot_bytes);
-    EXPECT_EQ(g.response_offset, g.reply_offset + 256u * kShmReplySlotBytes);
-    EXPECT_EQ(g.response_entry_bytes, 64u + 8u * 2048u);
-    EXPECT_EQ(g.total_bytes, AlignUp(g.response_offset + 64 * g.response_entry_bytes, 4096));
+    EXPECT_EQ(g.total_bytes, g.slots_offset + 8 * g.slot_bytes);
   }
-  EXPECT_EQ(ComputeGeometry(320, 180, 8, 256, 64).slot_bytes, 528384u);  // the figure docs/protocol.md quotes
+  // The figures docs/protocol.md quotes.
+  EXPECT_EQ(ComputeGeometry(320, 180, 8).slot_bytes, 528384u);
+  EXPECT_EQ(ComputeGeometry(320, 180, 8).total_bytes, 4231168u);
+  EXPECT_EQ(kAreaRequestOffset, 256u);
+  EXPECT_EQ(kAreaResponseOffset, 16640u);
+  EXPECT_EQ(kAreaBytes, 36864u);
 }
 
 TEST(ShmLayout, SlotsHoldOnlyTheRingsChannels) {
   constexpr uint64_t kPixels = 320 * 180;
   // RGB alone: the figures docs/protocol.md quotes for --shm-channels rgb.
-  const Geometry rgb = ComputeGeometry(320, 180, 8, 256, 64, ChannelBit(kShmChannelRgb));
+  const Geometry rgb = ComputeGeometry(320, 180, 8, ChannelBit(kShmChannelRgb));
   EXPECT_EQ(rgb.rgb_offset, kShmFrameHeaderBytes);
   EXPECT_EQ(rgb.depth_offset, 0u);
   EXPECT_EQ(rgb.mask_offset, 0u);
   EXPECT_EQ(rgb.slot_bytes, 184320u);
-  EXPECT_EQ(rgb.reply_offset, 4096u + 8 * 184320u);
+  EXPECT_EQ(rgb.total_bytes, 4096u + 8 * 184320u);
   // Present planes are packed in RGB, DEPTH, MASK order from the slot header on.
-  const Geometry depth_mask =
-      ComputeGeometry(320, 180, 8, 256, 64, ChannelBit(kShmChannelDepth) | ChannelBit(kShmChannelMask));
+  const Geometry depth_mask = ComputeGeometry(320, 180, 8, ChannelBit(kShmChannelDepth) | ChannelBit(kShmChannelMask));
   EXPECT_EQ(depth_mask.rgb_offset, 0u);
   EXPECT_EQ(depth_mask.depth_offset, kShmFrameHeaderBytes);
   EXPECT_EQ(depth_mask.mask_offset, AlignUp(kShmFrameHeaderBytes + kPixels * 4, kShmAlignment));
   EXPECT_EQ(depth_mask.slot_bytes, AlignUp(depth_mask.mask_offset + kPixels * 2, 4096));
-  const Geometry odd = ComputeGeometry(17, 19, 2, 8, 1, ChannelBit(kShmChannelRgb) | ChannelBit(kShmChannelMask));
+  const Geometry odd = ComputeGeometry(17, 19, 2, ChannelBit(kShmChannelRgb) | ChannelBit(kShmChannelMask));
   EXPECT_EQ(odd.mask_offset, AlignUp(kShmFrameHeaderBytes + 17 * 19 * 3, kShmAlignment));
-  EXPECT_EQ(odd.mask_offset % kShmAlignment, 0u);
-  // The default is every channel, as before the mask existed.
-  EXPECT_EQ(ComputeGeometry(320, 180, 8, 256, 64, kShmAllPixelChannels).slot_bytes,
-            ComputeGeometry(320, 180, 8, 256, 64).slot_bytes);
+  EXPECT_EQ(ComputeGeometry(320, 180, 8, kShmAllPixelChannels).slot_bytes, ComputeGeometry(320, 180, 8).slot_bytes);
   EXPECT_EQ(ChannelFlagValue(kShmAllPixelChannels), "rgb,depth,mask");
   EXPECT_EQ(ChannelFlagValue(ChannelBit(kShmChannelMask)), "mask");
 }
 
-TEST(ShmLayout, ReplyChecksumTestVectors) {
-  // Also quoted in docs/protocol.md for implementers in other languages.
-  EXPECT_EQ(ReplyChecksum(1, nullptr, 0), 0x0eaff284u);
-  const uint8_t step[2] = {0x2a, 0x00};
-  EXPECT_EQ(ReplyChecksum(0x0123456789abcdefull, step, 2), 0x77f1b415u);
+TEST(ShmLayout, SocketPathIsAbstractAndBounded) {
+  EXPECT_EQ(SocketPath("/x"), std::string("\0sim4cv-shm/x", 13));
+  EXPECT_EQ(SocketPath(std::string(kShmMaxNameBytes, 'n')).size(), sizeof(sockaddr_un::sun_path));
 }
 
-TEST(ShmLayout, ReplyStateEncoding) {
-  EXPECT_EQ(ReplyWritingState(0), 1u);
-  EXPECT_EQ(ReplyCompleteState(0), 2u);
-  EXPECT_EQ(ReplyTicketOf(ReplyWritingState(41)), 41u);
-  EXPECT_EQ(ReplyTicketOf(ReplyCompleteState(41)), 41u);
-}
-
-// Every name a test used is removed at exit, even after a failed assertion.
-struct Names {
-  std::vector<std::string> used;
-  ~Names() {
-    for (const auto& name : used) shm_unlink(name.c_str());
-  }
-};
-
-std::string UniqueName(const char* what) {
-  static Names names;
-  names.used.push_back("/sim4cv-unit-" + std::string(what) + "-" + std::to_string(getpid()));
-  return names.used.back();
-}
-
-transport::ShmRegionParams Params(const std::string& name) {
+transport::ShmRegionParams Params() {
   transport::ShmRegionParams p;
-  p.name = name;
   p.camera_name = "uav";
   p.width = 40;
   p.height = 30;
   p.slot_count = 3;
-  p.reply_capacity = 16;
-  p.response_entries = 4;
   p.expiry_ms = 1234;
   return p;
 }
 
-TEST(ShmLayout, DaemonWritesTheDocumentedHeader) {
-  transport::ShmRegion region(Params(UniqueName("header")));
+TEST(ShmLayout, DaemonWritesTheDocumentedHeaderAndSealsTheObject) {
+  transport::ShmRegion region(Params());
   const ShmHeader& h = region.header();
   EXPECT_EQ(std::string(h.magic, 8), "SIM4CVSM");
-  EXPECT_EQ(h.layout_version, kShmLayoutVersion);
+  EXPECT_EQ(h.layout_version, 2u);
   EXPECT_EQ(h.header_bytes, 512u);
   EXPECT_EQ(h.slot_count, 3u);
   EXPECT_EQ(h.camera_width, 40u);
   EXPECT_EQ(h.camera_height, 30u);
   EXPECT_EQ(h.writer_pid, static_cast<uint32_t>(getpid()));
   EXPECT_STREQ(h.camera_name, "uav");
-  EXPECT_EQ(h.reply_capacity, 16u);
-  EXPECT_EQ(h.response_entries, 4u);
   EXPECT_EQ(h.expiry_ms, 1234u);
   EXPECT_EQ(h.protocol_version, 1u);
   EXPECT_EQ(h.published, 0u);
   EXPECT_EQ(h.total_bytes, region.geometry().total_bytes);
   EXPECT_EQ(h.channel_mask, kShmAllPixelChannels);
+  EXPECT_EQ(fcntl(region.fd(), F_GET_SEALS),
+            F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_FUTURE_WRITE | F_SEAL_SEAL);
 
   ShmClient client;
-  client.Open(region.params().name.substr(1));  // the leading '/' is optional
+  client.OpenFrames(region.fd());
   EXPECT_EQ(client.camera(), "uav");
   EXPECT_EQ(client.newest_frame_id(), 0u);
   OwnedFrame frame;
@@ -158,32 +131,60 @@ TEST(ShmLayout, DaemonWritesTheDocumentedHeader) {
   EXPECT_TRUE(client.carries(proto::CHANNEL_RGB) && client.carries(proto::CHANNEL_DEPTH) &&
               client.carries(proto::CHANNEL_MASK));
   EXPECT_FALSE(client.carries(proto::CHANNEL_BOXES)) << "boxes are not a pixel channel";
-  region.Unlink();
+  EXPECT_THROW(client.Step(), ConnectionError) << "a frames-only reader has no request ring";
+}
+
+TEST(ShmLayout, ClientAreaIsSealedAgainstResizingOnly) {
+  transport::ShmClientArea area;
+  EXPECT_EQ(fcntl(area.fd(), F_GET_SEALS), F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL);
+  const ShmAreaHeader& h = area.map().header();
+  EXPECT_EQ(std::string(h.magic, 8), "SIM4CVCA");
+  EXPECT_EQ(h.total_bytes, kAreaBytes);
+  EXPECT_EQ(h.request_capacity, 64u);
+  EXPECT_EQ(h.response_depth, 8u);
 }
 
 TEST(ShmLayout, RgbOnlyRingIsSmallerAndSaysWhatItCarries) {
-  auto params = Params(UniqueName("rgb-only"));
+  auto params = Params();
   params.channel_mask = ChannelBit(kShmChannelRgb);
   transport::ShmRegion region(params);
   EXPECT_EQ(region.header().channel_mask, 0x02u);
   EXPECT_EQ(region.header().slot_bytes, AlignUp(kShmFrameHeaderBytes + 40 * 30 * 3, 4096));
   ShmClient client;
-  client.Open(params.name);
+  client.OpenFrames(region.fd());
   EXPECT_TRUE(client.carries(proto::CHANNEL_RGB));
   EXPECT_FALSE(client.carries(proto::CHANNEL_DEPTH));
   EXPECT_FALSE(client.carries(proto::CHANNEL_MASK));
-  region.Unlink();
 }
 
-TEST(ShmLayout, ObjectWithoutAChannelMaskCarriesEveryChannel) {
-  // Daemons that predate --shm-channels left the field zero.
-  transport::ShmRegion region(Params(UniqueName("no-mask")));
-  region.header().channel_mask = 0;
+void ExpectOpenFramesFails(const transport::ShmRegion& region, std::initializer_list<std::string> fragments) {
   ShmClient client;
-  client.Open(region.params().name);
-  EXPECT_TRUE(client.carries(proto::CHANNEL_DEPTH));
-  region.Unlink();
+  try {
+    client.OpenFrames(region.fd());
+    ADD_FAILURE() << "OpenFrames succeeded";
+  } catch (const ShmError& error) {
+    for (const auto& fragment : fragments)
+      EXPECT_NE(std::string(error.what()).find(fragment), std::string::npos) << error.what();
+  }
+  EXPECT_FALSE(client.is_open());
 }
+
+TEST(ShmLayout, WrongLayoutVersionIsAClearError) {
+  transport::ShmRegion region(Params());
+  region.header().layout_version = 99;
+  ExpectOpenFramesFails(region, {"layout version 99", "layout version 2"});
+}
+
+TEST(ShmLayout, InconsistentHeaderIsAClearError) {
+  transport::ShmRegion region(Params());
+  region.header().channel_mask = 0x1e;  // BOXES is no pixel channel
+  ExpectOpenFramesFails(region, {"channel mask 30", "RGB, DEPTH and MASK"});
+  region.header().channel_mask = kShmAllPixelChannels;
+  region.header().slot_count = 1000;  // slots beyond the object
+  ExpectOpenFramesFails(region, {"do not fit"});
+}
+
+std::string UniqueName(const char* what) { return "/sim4cv-unit-" + std::string(what) + "-" + std::to_string(getpid()); }
 
 void ExpectOpenFails(const std::string& name, std::initializer_list<std::string> fragments) {
   ShmClient client;
@@ -197,72 +198,57 @@ void ExpectOpenFails(const std::string& name, std::initializer_list<std::string>
   EXPECT_FALSE(client.is_open());
 }
 
-TEST(ShmLayout, WrongLayoutVersionIsAClearError) {
-  transport::ShmRegion region(Params(UniqueName("version")));
-  region.header().layout_version = 99;
-  ExpectOpenFails(region.params().name, {"layout version 99", "layout version 1", region.params().name});
-  region.Unlink();
+TEST(ShmLayout, NameNobodyServesIsAClearError) {
+  ExpectOpenFails(UniqueName("missing"), {"no sim4cvd serves shared memory under", "--shm-name"});
 }
 
-TEST(ShmLayout, UnknownChannelBitsAreAClearError) {
-  transport::ShmRegion region(Params(UniqueName("bad-mask")));
-  region.header().channel_mask = 0x1e;  // BOXES is no pixel channel
-  ExpectOpenFails(region.params().name, {"channel mask 30", "RGB, DEPTH and MASK"});
-  region.Unlink();
+// A listener that answers one connection with `attach` (no descriptors).
+void AnswerOnce(const std::string& name, const ShmAttach& attach, std::size_t bytes) {
+  transport::ShmListener listener(name);
+  std::thread client([&] { ExpectOpenFails(name, {name}); });
+  int connection = -1;
+  while ((connection = listener.Accept()) < 0) std::this_thread::yield();
+  send(connection, &attach, bytes, MSG_NOSIGNAL);
+  client.join();
+  close(connection);
 }
 
-TEST(ShmLayout, MissingObjectIsAClearError) {
-  ExpectOpenFails(UniqueName("missing"), {"no shared-memory object", "--shm-name"});
+TEST(ShmLayout, ForeignOrOtherVersionAnswerIsAClearError) {
+  ShmAttach attach{};
+  std::memcpy(attach.magic, "GARBAGE!", 8);
+  AnswerOnce(UniqueName("foreign"), attach, sizeof attach);
+  std::memcpy(attach.magic, SIM4CV_SHM_ATTACH_MAGIC, 8);
+  attach.layout_version = 1;
+  AnswerOnce(UniqueName("old"), attach, sizeof attach);
+  ExpectOpenFails(UniqueName("gone"), {"no sim4cvd serves"});
 }
 
-TEST(ShmLayout, ForeignObjectIsAClearError) {
-  const std::string name = UniqueName("foreign");
-  const int fd = shm_open(name.c_str(), O_CREAT | O_RDWR | O_TRUNC, 0600);
-  ASSERT_GE(fd, 0);
-  std::string junk(4096, '\x7f');
-  junk.replace(0, 8, "GARBAGE!");
-  ASSERT_EQ(write(fd, junk.data(), junk.size()), static_cast<ssize_t>(junk.size()));
-  close(fd);
-  ExpectOpenFails(name, {"GARBAGE!", "SIM4CVSM", "not a sim4cv ring"});
-  shm_unlink(name.c_str());
-
-  const int tiny = shm_open(name.c_str(), O_CREAT | O_RDWR | O_TRUNC, 0600);
-  ASSERT_GE(tiny, 0);
-  close(tiny);
-  ExpectOpenFails(name, {"0 bytes", "smaller than"});
-  shm_unlink(name.c_str());
-}
-
-TEST(ShmLayout, StaleObjectIsReplaced) {
-  const std::string name = UniqueName("stale");
-  const int fd = shm_open(name.c_str(), O_CREAT | O_RDWR | O_TRUNC, 0600);
-  ASSERT_GE(fd, 0);
-  ASSERT_EQ(ftruncate(fd, 100), 0);
-  close(fd);
-  transport::ShmRegion region(Params(name));
-  ShmClient client;
-  client.Open(name);
-  EXPECT_EQ(client.header().total_bytes, region.geometry().total_bytes);
-  region.Unlink();
-  ExpectOpenFails(name, {"no shared-memory object"});
-}
-
-TEST(ShmLayout, ADaemonNeverRemovesTheObjectThatReplacedItsOwn) {
-  const std::string name = UniqueName("twice");
-  transport::ShmRegion first(Params(name));
-  transport::ShmRegion second(Params(name));  // e.g. a second daemon with the same --shm-name
-  first.Unlink();
-  ShmClient client;
-  client.Open(name);
-  EXPECT_EQ(client.header().writer_pid, static_cast<uint32_t>(getpid()));
-  second.Unlink();
-  ExpectOpenFails(name, {"no shared-memory object"});
+TEST(ShmLayout, RefusalReachesTheClientWithItsReason) {
+  const std::string name = UniqueName("refuses");
+  transport::ShmListener listener(name);
+  std::thread client([&] { ExpectOpenFails(name, {"all 3 places taken"}); });
+  int connection = -1;
+  while ((connection = listener.Accept()) < 0) std::this_thread::yield();
+  transport::ShmListener::Refuse(connection, "all 3 places taken");
+  client.join();
+  close(connection);
 }
 
 TEST(ShmLayout, BadParametersAreNamed) {
-  auto params = Params("no-slash");
-  EXPECT_THROW(transport::ShmRegion{params}, std::invalid_argument);
-  params = Params(UniqueName("slots"));
+  EXPECT_THROW(transport::ShmListener("no-slash"), std::invalid_argument);
+  EXPECT_THROW(transport::ShmListener("/" + std::string(kShmMaxNameBytes, 'n')), std::invalid_argument);
+  {
+    const std::string name = UniqueName("taken");
+    transport::ShmListener first(name);
+    try {
+      transport::ShmListener second(name);
+      ADD_FAILURE() << "two listeners on one name";
+    } catch (const std::runtime_error& error) {
+      EXPECT_NE(std::string(error.what()).find("another sim4cvd serves this --shm-name"), std::string::npos)
+          << error.what();
+    }
+  }
+  auto params = Params();
   params.slot_count = 1;
   try {
     transport::ShmRegion region(params);
@@ -271,7 +257,7 @@ TEST(ShmLayout, BadParametersAreNamed) {
     EXPECT_NE(std::string(error.what()).find("--shm-slots 1"), std::string::npos) << error.what();
   }
   for (const uint32_t mask : {0u, 0x10u, 0x0fu}) {
-    params = Params(UniqueName("channels"));
+    params = Params();
     params.channel_mask = mask;
     try {
       transport::ShmRegion region(params);

@@ -3,7 +3,7 @@
 // one process, with a stand-in for the sim thread that offers replies through
 // the client's link and frames through the ring's writer, as the scheduler
 // does. Here "before the frame" means: once a client can read a frame, the
-// replies offered before it are in its response entry.
+// replies offered before it are in its response ring.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -21,7 +21,7 @@ namespace {
 
 class ShmReplyPathTest : public ::testing::Test {
  protected:
-  // `max_clients` response entries; clients silent for `expiry_ms` are dropped.
+  // `max_clients` attachments; clients silent for `expiry_ms` are dropped.
   void Start(uint32_t max_clients = 4, uint32_t expiry_ms = 5000) {
     transport::ShmOptions options;
     options.name = "/sim4cv-unit-reply-path-" + std::to_string(getpid());
@@ -35,7 +35,7 @@ class ShmReplyPathTest : public ::testing::Test {
     subscriber_ = Connect(client_);
   }
   void TearDown() override {
-    if (transport_) transport_->Stop();  // also removes the object's name
+    if (transport_) transport_->Stop();  // also frees the name
   }
 
   // Opens `client`, says Hello and subscribes (newest); its link as the sim thread gets it.
@@ -103,11 +103,11 @@ TEST_F(ShmReplyPathTest, FatalErrorFromTheSimThreadIsSentThenTheSessionEnds) {
 
 TEST_F(ShmReplyPathTest, OfferingToAnExpiredClientIsHarmlessAndReachesNoOtherClient) {
   Start(/*max_clients=*/1, /*expiry_ms=*/300);
-  // The client falls silent and is dropped; its only response entry is free again.
+  // The client falls silent and is dropped; its only place is free again.
   ASSERT_TRUE(sim_.WaitForDisconnect(subscriber_.client));
   ShmClient next;
   next.Open(transport_->info().address());
-  next.Hello("takes-the-entry");  // the one entry: the one the first client had
+  next.Hello("takes-the-place");  // the one place: the one the first client had
   subscriber_.link->OfferReply(MarkedReply(1));
   subscriber_.link->OfferFrame(sim_.MakeFrame(1));
   proto::Envelope reply;

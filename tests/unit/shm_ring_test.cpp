@@ -24,21 +24,12 @@ namespace {
 using namespace std::chrono_literals;
 constexpr uint32_t kWidth = 48, kHeight = 32;
 
-// Removes the object at the end of a test even when an assertion ends it early.
-struct Unlinker {
-  std::string name;
-  ~Unlinker() { shm_unlink(name.c_str()); }
-};
-
-ShmRegionParams Params(const std::string& what, uint32_t slots) {
+ShmRegionParams Params(const std::string& /*what*/, uint32_t slots) {
   ShmRegionParams p;
-  p.name = "/sim4cv-unit-ring-" + what + "-" + std::to_string(getpid());
   p.camera_name = "uav";
   p.width = kWidth;
   p.height = kHeight;
   p.slot_count = slots;
-  p.reply_capacity = 8;
-  p.response_entries = 2;
   return p;
 }
 
@@ -89,7 +80,6 @@ std::string Inconsistency(const OwnedFrame& f) {
 
 TEST(ShmRing, HammeredRingNeverYieldsATornFrame) {
   auto region = std::make_shared<ShmRegion>(Params("hammer", 2));  // 2 slots: maximal reuse
-  const Unlinker cleanup{region->params().name};
   ShmRingWriter writer(region, 0);
   std::atomic<bool> done{false};
   std::atomic<uint64_t> written{0};
@@ -103,7 +93,7 @@ TEST(ShmRing, HammeredRingNeverYieldsATornFrame) {
   });
 
   ShmClient client;
-  client.Open(region->params().name);
+  client.OpenFrames(region->fd());
   OwnedFrame frame;
   uint64_t copies = 0, views_accepted = 0, views_stale = 0, last_id = 0;
   const auto end = std::chrono::steady_clock::now() + 1500ms;
@@ -147,13 +137,12 @@ TEST(ShmRing, HammeredRingNeverYieldsATornFrame) {
 
 TEST(ShmRing, UnreleasedViewGoesStaleWithoutBlockingTheWriter) {
   auto region = std::make_shared<ShmRegion>(Params("stale-view", 3));
-  const Unlinker cleanup{region->params().name};
   ShmRingWriter writer(region, 0);
   session::Frame frame;
   FillFrame(frame, 1);
   writer.Write(frame);
   ShmClient client;
-  client.Open(region->params().name);
+  client.OpenFrames(region->fd());
   FrameView view;
   ASSERT_TRUE(client.AcquireNewest(view));
   EXPECT_EQ(view.frame_id(), 1u);
@@ -185,10 +174,9 @@ TEST(ShmRing, RingWithoutSomeChannelsReportsThemAbsent) {
   auto params = Params("channels", 2);
   params.channel_mask = shm::ChannelBit(shm::kShmChannelRgb);
   auto region = std::make_shared<ShmRegion>(params);
-  const Unlinker cleanup{region->params().name};
   ShmRingWriter writer(region, 0);
   ShmClient client;
-  client.Open(region->params().name);
+  client.OpenFrames(region->fd());
   OwnedFrame owned;
   session::Frame frame;
   // A reused OwnedFrame: its depth and mask must not keep an earlier frame's pixels.
@@ -234,10 +222,9 @@ TEST(ShmRing, RingWithoutRgbPacksTheOtherPlanes) {
   auto params = Params("no-rgb", 2);
   params.channel_mask = shm::ChannelBit(shm::kShmChannelDepth) | shm::ChannelBit(shm::kShmChannelMask);
   auto region = std::make_shared<ShmRegion>(params);
-  const Unlinker cleanup{region->params().name};
   ShmRingWriter writer(region, 0);
   ShmClient client;
-  client.Open(region->params().name);
+  client.OpenFrames(region->fd());
   session::Frame frame;
   FillFrame(frame, 8);
   writer.Write(frame);
@@ -259,7 +246,6 @@ TEST(ShmRing, RingWithoutRgbPacksTheOtherPlanes) {
 
 TEST(ShmRing, IgnoresFramesOfOtherCameras) {
   auto region = std::make_shared<ShmRegion>(Params("camera", 2));
-  const Unlinker cleanup{region->params().name};
   ShmRingWriter writer(region, 1);
   session::Frame frame;
   FillFrame(frame, 5);  // camera 0
@@ -272,10 +258,9 @@ TEST(ShmRing, IgnoresFramesOfOtherCameras) {
 
 TEST(ShmRing, WaitForFrameWakesOnPublishAndOnClose) {
   auto region = std::make_shared<ShmRegion>(Params("wait", 2));
-  const Unlinker cleanup{region->params().name};
   ShmRingWriter writer(region, 0);
   ShmClient client;
-  client.Open(region->params().name);
+  client.OpenFrames(region->fd());
   EXPECT_FALSE(client.WaitForFrame(0, 20ms));
   std::thread publisher([&] {
     std::this_thread::sleep_for(50ms);

@@ -4,9 +4,9 @@
 
 namespace sim4cv::transport {
 
-ShmClientLink::ShmClientLink(std::shared_ptr<ShmResponder> responder, int entry, session::Counters& counters,
+ShmClientLink::ShmClientLink(std::shared_ptr<ShmClientArea> area, session::Counters& counters,
                              std::function<void()> on_fatal)
-    : responder_(std::move(responder)), entry_(entry), counters_(counters), on_fatal_(std::move(on_fatal)) {}
+    : area_(std::move(area)), counters_(counters), on_fatal_(std::move(on_fatal)) {}
 
 void ShmClientLink::OfferFrame(const session::FrameRef&) { frames_offered_.fetch_add(1, std::memory_order_relaxed); }
 
@@ -33,6 +33,13 @@ void ShmClientLink::Close() {
   closed_ = true;
 }
 
+void ShmClientLink::EndAttachment(const proto::Envelope* error) {
+  std::lock_guard lock(mutex_);
+  if (!closed_ && error) Write(*error);
+  closed_ = true;
+  area_->MarkClosed();
+}
+
 bool ShmClientLink::closed() const {
   std::lock_guard lock(mutex_);
   return closed_;
@@ -44,7 +51,7 @@ std::string ShmClientLink::fatal_message() const {
 }
 
 void ShmClientLink::Write(const proto::Envelope& reply) {
-  if (responder_->Write(entry_, reply)) return;
+  if (area_->Write(reply)) return;
   counters_.Add("shm.responses_too_large");
   proto::Envelope refusal;
   session::ClientProtocol::Refuse(proto::ERROR_CODE_INVALID_STATE,
@@ -52,7 +59,7 @@ void ShmClientLink::Write(const proto::Envelope& reply) {
                                       std::to_string(shm::kShmResponseDataBytes) +
                                       " a shared-memory response holds; ask for it over TCP",
                                   false, refusal);
-  responder_->Write(entry_, refusal);
+  area_->Write(refusal);
 }
 
 }  // namespace sim4cv::transport

@@ -4,13 +4,13 @@
 // Its frames travel through the ring (ShmRingWriter), so OfferFrame only
 // counts them: each is one "frame sent" for the lockstep Step limit.
 //
-// Its replies go into the client's response entry: ClientProtocol's from the
+// Its replies go into the client's response ring (its ShmClientArea): ClientProtocol's from the
 // shm thread (Reply), the sim thread's from the sim thread itself
 // (OfferReply). The ring's frames are published on the sim thread as they are
 // offered, so writing the reply there too is the only way it can be visible
 // before the next frame without the sim thread waiting for the shm thread.
 // Like publishing a frame it is a copy into shared memory and a futex wake,
-// never I/O; a mutex keeps the entry's two writers apart, held by either only
+// never I/O; a mutex keeps the area's two writers apart, held by either only
 // while one response (at most 2 KiB) is written.
 #pragma once
 
@@ -23,18 +23,16 @@
 
 #include "server/session/client_link.h"
 #include "server/session/counters.h"
-#include "server/transport/shm/shm_responder.h"
+#include "server/transport/shm/shm_client_area.h"
 
 namespace sim4cv::transport {
 
 class ShmClientLink : public session::ClientLink {
  public:
-  // Writes into response entry `entry` of `responder`. `on_fatal` runs on the
-  // sim thread after OfferReply has sent a fatal Error (and closed this
-  // link): the shm thread must then end the session, as after
-  // ClientProtocol's fatal Errors.
-  ShmClientLink(std::shared_ptr<ShmResponder> responder, int entry, session::Counters& counters,
-                std::function<void()> on_fatal);
+  // Writes into `area`'s response ring. `on_fatal` runs on the sim thread
+  // after OfferReply has sent a fatal Error (and closed this link): the shm
+  // thread must then end the session, as after ClientProtocol's fatal Errors.
+  ShmClientLink(std::shared_ptr<ShmClientArea> area, session::Counters& counters, std::function<void()> on_fatal);
 
   // Sim thread.
   void OfferFrame(const session::FrameRef& frame) override;
@@ -45,9 +43,13 @@ class ShmClientLink : public session::ClientLink {
   // Writes one of ClientProtocol's replies. Like OfferReply, it drops what
   // comes once the link is closed, and a fatal Error closes it.
   void Reply(const proto::Envelope& reply);
-  // The session is over: nothing more is written (its entry may go to
-  // another client next). Idempotent.
+  // The session is over: nothing more is written through this link (the
+  // client's next session gets a new one). Idempotent.
   void Close();
+  // The client's attachment is over: writes `error` if the link is still
+  // open and it is set, closes the link and marks the area closed, so the
+  // client learns it at once. Idempotent.
+  void EndAttachment(const proto::Envelope* error);
   // True once closed, by Close or by a fatal Error.
   bool closed() const;
   // The message of the fatal Error that closed the link, for the log.
@@ -61,8 +63,7 @@ class ShmClientLink : public session::ClientLink {
   // does not fit in a response message.
   void Write(const proto::Envelope& reply);
 
-  std::shared_ptr<ShmResponder> responder_;
-  const int entry_;
+  std::shared_ptr<ShmClientArea> area_;  // kept mapped while the sim thread may still hold this link
   session::Counters& counters_;
   std::function<void()> on_fatal_;
   std::atomic<uint64_t> frames_offered_{0};

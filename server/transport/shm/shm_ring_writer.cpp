@@ -80,17 +80,18 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   for (const Plane& plane : planes) {
     if (plane.offset != 0 && plane.available_bytes < pixels * plane.bytes_per_pixel) return;
   }
-  const shm::Mapped& map = region.map();
+  // Every address comes from the daemon's own geometry; nothing is read back from the object.
+  const shm::FrameMap& map = region.map();
   shm::ShmHeader& header = map.header();
   const uint64_t publication = published_ + 1;
-  const uint64_t slot_index = (publication - 1) % params.slot_count;
+  const uint64_t slot_index = publication - 1;  // FrameMap takes it modulo slot_count
   uint8_t* slot = map.slot_bytes(slot_index);
   shm::ShmFrameHeader& h = map.slot(slot_index);
 
-  // Seqlock: odd while the slot changes, so readers discard what they copy meanwhile.
+  // Seqlock: odd while the slot changes, so readers discard what they copy
+  // meanwhile. The value comes from the publication, not from the slot.
   auto sequence = shm::Atomic(h.sequence);
-  const uint64_t before = sequence.load(std::memory_order_relaxed);
-  sequence.store(before + 1, std::memory_order_relaxed);
+  sequence.store(2 * publication + 1, std::memory_order_relaxed);
   std::atomic_thread_fence(std::memory_order_release);
 
   h.publication = publication;
@@ -118,12 +119,15 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   h.box_total = static_cast<uint32_t>(frame.boxes.size());
   FillEntities(frame.state, h);
 
-  sequence.store(before + 2, std::memory_order_release);
+  sequence.store(2 * publication + 2, std::memory_order_release);
   published_ = publication;
   // published first: a reader that sees newest_frame_id finds that frame (or a newer one) published.
   shm::Atomic(header.published).store(publication, std::memory_order_release);
   shm::Atomic(header.newest_frame_id).store(frame.frame_id, std::memory_order_release);
-  shm::BumpAndWake(header.frame_futex, header.frame_waiters);
+  // Clients cannot write the object, so the daemon alone changes this word;
+  // it wakes unconditionally (no waiter count a client could have zeroed).
+  shm::Atomic(header.frame_futex).fetch_add(1, std::memory_order_seq_cst);
+  shm::FutexWake(header.frame_futex, 0x7fffffff);
 }
 
 void ShmRingWriter::Close() {

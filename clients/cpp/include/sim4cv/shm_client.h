@@ -1,8 +1,10 @@
 // sim4cv::ShmClient: frames from sim4cvd's shared-memory ring (--shm-name)
-// without a socket, and requests (Hello, Subscribe, Step, TrackerOutput,
-// Controls, GetState) through its reply ring. Layout and rules:
-// protocol/shm_layout.h and docs/protocol.md section 13. Depends on the
-// protocol only, never on server code.
+// read in place, and requests (Hello, Subscribe, Step, TrackerOutput,
+// Controls, GetState) through this client's own request ring. Open attaches
+// through the daemon's Unix socket, which hands over the frame object (mapped
+// read-only) and this client's area (requests and responses). Layout and
+// rules: protocol/shm_layout.h and docs/protocol.md section 13. Depends on
+// the protocol only, never on server code.
 //
 //   sim4cv::ShmClient shm;
 //   shm.Open("/sim4cv");
@@ -31,7 +33,7 @@
 #include <string>
 #include <vector>
 
-#include "protocol/shm_layout.h"
+#include "protocol/shm_sync.h"
 #include "sim4cv.pb.h"
 #include "sim4cv/client.h"  // ImageView, ServerError, ConnectionError
 
@@ -109,20 +111,24 @@ class ShmClient {
  public:
   using Duration = std::chrono::milliseconds;
 
-  ShmClient();  // draws a random non-zero client token
+  ShmClient() = default;
   ~ShmClient();
   ShmClient(const ShmClient&) = delete;
   ShmClient& operator=(const ShmClient&) = delete;
 
-  // Maps the object ("/name" or "name"). Throws ShmError if it does not
-  // exist, is not a sim4cv ring (magic), or has another layout version (the
-  // message names both).
+  // Attaches to the daemon serving --shm-name `name` ("/name" or "name"):
+  // connects to its Unix socket, receives the frame object and this
+  // client's area, maps and checks them. Throws ShmError if no daemon
+  // serves the name, it refuses (the message says why), or it speaks
+  // another layout version (the message names both).
   void Open(const std::string& name);
+  // Low level: maps only a frame object from its descriptor (a reader that
+  // got it some other way; tests). Requests need Open.
+  void OpenFrames(int frames_fd);
   void Close();
-  bool is_open() const { return base_ != nullptr; }
-  const shm::ShmHeader& header() const { return *reinterpret_cast<const shm::ShmHeader*>(base_); }
+  bool is_open() const { return frames_ != nullptr; }
+  const shm::ShmHeader& header() const { return *reinterpret_cast<const shm::ShmHeader*>(frames_); }
   std::string camera() const;
-  uint64_t token() const { return token_; }
   // Whether the ring's frames hold this pixel channel (the daemon's --shm-channels).
   bool carries(proto::Channel channel) const;
 
@@ -144,10 +150,11 @@ class ShmClient {
   // spin only burns a core that the daemon may need (docs/protocol.md 13.4).
   void set_spin(std::chrono::microseconds spin) { spin_ = spin; }
 
-  // Requests through the reply ring; replies come back through this client's
-  // response entry. Hello and Subscribe wait for their answer and throw
+  // Requests through this client's request ring; replies come back through
+  // its response ring. Hello and Subscribe wait for their answer and throw
   // ServerError if the daemon refuses; Step, SendTrackerOutput and
   // SendControls do not wait (a refusal arrives later, see ReceiveReply).
+  // Hello attaches again if the daemon ended the attachment (13.7).
   proto::Welcome Hello(const std::string& client_name = "cpp-shm-client", Duration timeout = Duration(5000),
                        uint32_t protocol_version = 0 /* 0: this build's */);
   // Subscribes to the ring's camera (frames stay in the ring), with the
@@ -162,36 +169,51 @@ class ShmClient {
   void SendControls(uint32_t entity_id, float steering, float throttle, float brake);
   proto::State GetState(Duration timeout = Duration(5000));
 
-  // Low level: one Envelope into the reply ring (at most
-  // shm::kShmReplyDataBytes encoded; ShmError if larger).
+  // Low level: one Envelope into the request ring (at most
+  // shm::kShmRequestDataBytes encoded; ShmError if larger).
   void SendEnvelope(const proto::Envelope& envelope);
-  // Low level: raw bytes as one message (tests use it to send garbage).
+  // Low level: raw bytes as one request (tests use it to send garbage).
   void SendRaw(const void* data, std::size_t size);
   // Low level: the next response of any kind (queued ones first); false on
-  // timeout. Errors are returned, not thrown.
+  // timeout. Errors are returned, not thrown; ConnectionError once the
+  // daemon ended the attachment and every response was read.
   bool ReceiveReply(proto::Envelope& reply, Duration timeout);
   // Responses the daemon wrote that were overwritten before this client read them.
   uint64_t responses_lost() const { return responses_lost_; }
+  // True while attached (Open succeeded and the daemon has not ended it).
+  bool attached() const;
+  // Low level, for tests: this client's area (writable) and descriptors.
+  uint8_t* area() const { return area_; }
+  int socket_fd() const { return socket_; }
+  int doorbell_fd() const { return doorbell_; }
+  int frames_fd() const { return frames_fd_; }
+  int area_fd() const { return area_fd_; }
 
  private:
   using Deadline = std::chrono::steady_clock::time_point;
   bool CopyNewest(OwnedFrame& frame) const;
   void RequireOpen() const;  // throws ShmError
+  void Attach();             // connects and maps the area (and the frames, if not yet)
+  void Detach();             // unmaps the area, closes the socket and doorbell
+  void MapFrames(int fd, uint64_t bytes);
   bool TryReadResponse(proto::Envelope& reply);
   bool NextResponse(proto::Envelope& reply, Deadline deadline);  // from shared memory, not pending_
   bool ReceiveKind(proto::Envelope::KindCase kind, proto::Envelope& out, Deadline deadline);
-  void WaitForResponse(uint32_t seen, Deadline deadline);
-  int FindEntry();
+  // Throws ConnectionError unless attached; `check_socket` also asks the
+  // kernel whether the daemon's end of the socket is still open (a syscall).
+  void RequireAttached(bool check_socket) const;
+  bool attached(bool check_socket) const;
 
-  uint8_t* base_ = nullptr;
-  std::size_t mapped_bytes_ = 0;
+  // The frame object (read-only) and the geometry this client checked.
+  uint8_t* frames_ = nullptr;
+  shm::Geometry geometry_;
+  int frames_fd_ = -1;
   std::string name_;
-  uint64_t token_ = 0;
-  // Response entry: index, assignment generation, next response to read.
-  int entry_ = -1;
-  bool had_entry_ = false;  // an entry disappearing means the daemon expired us
-  uint32_t generation_ = 0;
-  uint64_t next_response_ = 0;
+  // This client's area, socket and doorbell (while attached).
+  uint8_t* area_ = nullptr;
+  int area_fd_ = -1, socket_ = -1, doorbell_ = -1;
+  uint64_t next_request_ = 0;   // own count of requests written
+  uint64_t next_response_ = 0;  // next response to read
   uint64_t responses_lost_ = 0;
   std::chrono::microseconds spin_{0};
   std::deque<proto::Envelope> pending_;

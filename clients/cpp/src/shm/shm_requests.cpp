@@ -1,8 +1,13 @@
-// sim4cv::ShmClient, request side: messages into the multi-producer reply
-// ring and responses out of this client's entry of the response area
-// (docs/protocol.md section 13.5).
+// sim4cv::ShmClient, request side: messages into this client's request ring
+// (single producer: this client; single consumer: the daemon) and responses
+// out of its response ring (docs/protocol.md section 13.5).
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstring>
+#include <thread>
 
 #include "protocol/framing.h"
 #include "../requests.h"
@@ -14,147 +19,124 @@ namespace {
 
 using Envelope = proto::Envelope;
 
-// A slot still being written by the producer a full lap earlier is taken
-// over after this many polls (that producer is dead or badly stalled).
-constexpr int kTakeoverPolls = 20000;
+// How long a sender waits for the daemon to free a request slot when all
+// are in use before deciding the daemon is stuck.
+constexpr auto kRingFullLimit = std::chrono::seconds(5);
 
 }  // namespace
 
 void ShmClient::SendEnvelope(const Envelope& envelope) {
   scratch_.clear();
   envelope.AppendToString(&scratch_);
-  if (scratch_.size() > shm::kShmReplyDataBytes) {
+  if (scratch_.size() > shm::kShmRequestDataBytes) {
     const auto* field = Envelope::descriptor()->FindFieldByNumber(envelope.kind_case());
     throw ShmError("the encoded " + (field ? field->name() : std::string("envelope")) + " is " +
-                   std::to_string(scratch_.size()) + " bytes; a shared-memory reply slot holds at most " +
-                   std::to_string(shm::kShmReplyDataBytes) + " (shorten client_name, or use TCP)");
+                   std::to_string(scratch_.size()) + " bytes; a shared-memory request slot holds at most " +
+                   std::to_string(shm::kShmRequestDataBytes) + " (shorten client_name, or use TCP)");
   }
   SendRaw(scratch_.data(), scratch_.size());
 }
 
-void ShmClient::SendRaw(const void* data, std::size_t size) {
-  if (!is_open()) throw ShmError("ShmClient::Open must succeed before sending");
-  if (size > shm::kShmReplyDataBytes) {
-    throw ShmError("message of " + std::to_string(size) + " bytes exceeds the " +
-                   std::to_string(shm::kShmReplyDataBytes) + "-byte reply slot");
+bool ShmClient::attached() const { return attached(true); }
+
+bool ShmClient::attached(bool check_socket) const {
+  if (!area_) return false;
+  auto& closed = shm::AreaMap(area_).header().closed;
+  if (shm::Atomic(closed).load(std::memory_order_acquire) != 0) return false;
+  if (!check_socket) return true;
+  // The daemon may also have died (SIGKILL): its end of the socket is then closed.
+  pollfd socket{socket_, POLLIN, 0};
+  if (poll(&socket, 1, 0) == 1 && (socket.revents & (POLLHUP | POLLERR | POLLRDHUP | POLLIN)) != 0) {
+    char byte;
+    if (recv(socket_, &byte, 1, MSG_DONTWAIT | MSG_PEEK) <= 0) return false;
   }
-  const shm::Mapped map(base_);
-  shm::ShmHeader& h = map.header();
-  const uint64_t ticket = shm::Atomic(h.reply_write).fetch_add(1, std::memory_order_acq_rel);
-  shm::ShmReplySlot& slot = map.reply_slot(ticket);
-  auto state = shm::Atomic(slot.state);
-  uint64_t current = state.load(std::memory_order_acquire);
-  for (int polls = 0;;) {
-    // A later ticket already holds the slot: ours is the oldest, so it is the
-    // one dropped (the daemon counts it when it reaches our ticket).
-    if (current != 0 && shm::ReplyTicketOf(current) >= ticket) return;
-    if ((current & 1) != 0 && ++polls < kTakeoverPolls) {
-      current = state.load(std::memory_order_acquire);
-      continue;
-    }
-    if (state.compare_exchange_weak(current, shm::ReplyWritingState(ticket), std::memory_order_acq_rel,
-                                    std::memory_order_acquire)) {
-      break;
-    }
-  }
-  std::atomic_thread_fence(std::memory_order_release);  // the odd state before any byte
-  slot.token = token_;
-  slot.size = static_cast<uint32_t>(size);
-  std::memcpy(slot.data, data, size);
-  slot.checksum = shm::ReplyChecksum(token_, slot.data, slot.size);
-  uint64_t expected = shm::ReplyWritingState(ticket);
-  // Fails only if we were so slow that the daemon gave up on this ticket or a
-  // producer a lap later took the slot; the message is then lost (and counted).
-  state.compare_exchange_strong(expected, shm::ReplyCompleteState(ticket), std::memory_order_release,
-                                std::memory_order_relaxed);
-  shm::BumpAndWake(h.reply_futex, h.reply_sleeping);
+  return true;
 }
 
-int ShmClient::FindEntry() {
-  const shm::Mapped map(base_);
-  const uint32_t entries = map.header().response_entries;
-  if (entry_ >= 0 && static_cast<uint32_t>(entry_) < entries) {
-    shm::ShmResponseEntry& e = map.response_entry(static_cast<uint32_t>(entry_));
-    if (shm::Atomic(e.token).load(std::memory_order_acquire) == token_ &&
-        shm::Atomic(e.generation).load(std::memory_order_relaxed) == generation_) {
-      return entry_;
+void ShmClient::RequireAttached(bool check_socket) const {
+  if (!frames_) throw ShmError("ShmClient::Open must succeed before sending");
+  if (!area_) throw ConnectionError("this shared-memory client is not attached to sim4cvd (Open failed or was not called)");
+  if (!attached(check_socket)) {
+    throw ConnectionError("sim4cvd ended this shared-memory client's attachment to " + name_ +
+                          " (it stopped, or the client was silent for its --shm-expiry-ms); send Hello to attach again");
+  }
+}
+
+void ShmClient::SendRaw(const void* data, std::size_t size) {
+  if (size > shm::kShmRequestDataBytes) {
+    throw ShmError("message of " + std::to_string(size) + " bytes exceeds the " +
+                   std::to_string(shm::kShmRequestDataBytes) + "-byte request slot");
+  }
+  RequireAttached(false);  // the flag only: no system call on the fast path
+  const shm::AreaMap area(area_);
+  shm::ShmAreaHeader& h = area.header();
+  // Only free slots may be written: wait (briefly: the daemon drains within
+  // microseconds) while the daemon has not yet taken the request a ring ago.
+  const auto give_up = std::chrono::steady_clock::now() + kRingFullLimit;
+  while (next_request_ - shm::Atomic(h.request_read).load(std::memory_order_acquire) >= shm::kShmRequestCapacity) {
+    RequireAttached(true);
+    if (std::chrono::steady_clock::now() > give_up) {
+      throw ConnectionError("sim4cvd took none of this client's " + std::to_string(shm::kShmRequestCapacity) +
+                            " queued shared-memory requests for " + std::to_string(kRingFullLimit.count()) + " s");
     }
+    std::this_thread::yield();
   }
-  for (uint32_t i = 0; i < entries; ++i) {
-    shm::ShmResponseEntry& e = map.response_entry(i);
-    if (shm::Atomic(e.token).load(std::memory_order_acquire) != token_) continue;
-    entry_ = static_cast<int>(i);  // a new assignment: its responses count from 0
-    had_entry_ = true;
-    generation_ = shm::Atomic(e.generation).load(std::memory_order_relaxed);
-    next_response_ = 0;
-    return entry_;
-  }
-  entry_ = -1;
-  return -1;
+  shm::ShmRequestSlot& slot = area.request(next_request_);
+  slot.size = static_cast<uint32_t>(size);
+  std::memcpy(slot.data, data, size);
+  // A plain release store publishes it: this client is the ring's only writer.
+  shm::Atomic(h.request_write).store(++next_request_, std::memory_order_release);
+  const uint64_t one = 1;
+  [[maybe_unused]] const auto rang = write(doorbell_, &one, sizeof one);  // wakes the daemon
 }
 
 bool ShmClient::TryReadResponse(Envelope& reply) {
-  for (;;) {
-    const int index = FindEntry();
-    if (index < 0) return false;
-    const shm::Mapped map(base_);
-    shm::ShmResponseEntry& entry = map.response_entry(static_cast<uint32_t>(index));
-    const uint64_t written = shm::Atomic(entry.written).load(std::memory_order_acquire);
+  if (!area_) return false;
+  const shm::AreaMap area(area_);
+  shm::ShmAreaHeader& h = area.header();
+  for (int attempts = 0; attempts < 1000; ++attempts) {
+    const uint64_t written = shm::Atomic(h.responses_written).load(std::memory_order_acquire);
     if (next_response_ >= written) return false;
-    const uint64_t depth = map.header().response_depth;
-    if (written - next_response_ > depth) {  // we fell a lap behind: the oldest are gone
-      responses_lost_ += written - depth - next_response_;
-      next_response_ = written - depth;
+    if (written - next_response_ > shm::kShmResponseDepth) {  // we fell a lap behind: the oldest are gone
+      responses_lost_ += written - shm::kShmResponseDepth - next_response_;
+      next_response_ = written - shm::kShmResponseDepth;
     }
-    shm::ShmResponseMessage& message = map.response_message(static_cast<uint32_t>(index), next_response_);
+    shm::ShmResponseMessage& message = area.response(next_response_);
     const uint64_t before = shm::Atomic(message.sequence).load(std::memory_order_acquire);
-    const uint64_t message_index = message.index;
     const uint32_t size = std::min<uint32_t>(message.size, shm::kShmResponseDataBytes);
     scratch_.assign(reinterpret_cast<const char*>(message.data), size);
     std::atomic_thread_fence(std::memory_order_acquire);
-    const bool intact = (before & 1) == 0 && shm::Atomic(message.sequence).load(std::memory_order_relaxed) == before &&
-                        message_index == next_response_;
+    const bool intact = before == shm::ResponseCompleteSequence(next_response_) &&
+                        shm::Atomic(message.sequence).load(std::memory_order_relaxed) == before;
     if (!intact) continue;  // overwritten while we copied: re-evaluate
-    // Still ours? An entry freed and reassigned meanwhile holds another client's responses.
-    if (shm::Atomic(entry.token).load(std::memory_order_acquire) != token_ ||
-        shm::Atomic(entry.generation).load(std::memory_order_relaxed) != generation_) {
-      continue;  // FindEntry sees the change
-    }
     ++next_response_;
     if (reply.ParseFromString(scratch_)) return true;
     ++responses_lost_;  // cannot happen with an intact copy of a daemon's response
   }
-}
-
-void ShmClient::WaitForResponse(uint32_t seen, Deadline deadline) {
-  shm::ShmHeader& h = shm::Mapped(base_).header();
-  const auto now = std::chrono::steady_clock::now();
-  if (now >= deadline) return;
-  shm::Atomic(h.response_waiters).fetch_add(1, std::memory_order_seq_cst);
-  if (shm::Atomic(h.response_futex).load(std::memory_order_seq_cst) == seen) {
-    shm::FutexWait(h.response_futex, seen,
-                   std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - now).count());
-  }
-  shm::Atomic(h.response_waiters).fetch_sub(1, std::memory_order_seq_cst);
+  return false;
 }
 
 bool ShmClient::NextResponse(Envelope& reply, Deadline deadline) {
-  if (!is_open()) throw ShmError("ShmClient::Open must succeed before receiving");
-  shm::ShmHeader& h = shm::Mapped(base_).header();
-  const auto spin_end = std::chrono::steady_clock::now() + spin_;
+  if (!frames_) throw ShmError("ShmClient::Open must succeed before receiving");
+  if (!area_) throw ConnectionError("this shared-memory client is not attached to sim4cvd");
+  auto& futex = shm::AreaMap(area_).header().response_futex;
+  const auto start = std::chrono::steady_clock::now();
+  const auto spin_end = start + spin_;
   for (;;) {
-    const uint32_t seen = shm::Atomic(h.response_futex).load(std::memory_order_seq_cst);
+    const uint32_t seen = shm::Atomic(futex).load(std::memory_order_seq_cst);
     if (TryReadResponse(reply)) return true;
+    // Every response was read: if the attachment is over, none will come.
     if (closed()) throw ConnectionError("sim4cvd stopped: the shared-memory ring " + name_ + " is closed");
-    if (entry_ < 0 && had_entry_) {
-      had_entry_ = false;
-      throw ConnectionError("sim4cvd disconnected this shared-memory client after " + std::to_string(h.expiry_ms) +
-                            " ms without a message (its --shm-expiry-ms); send Hello again");
-    }
     const auto now = std::chrono::steady_clock::now();
+    // The flag says whether the daemon ended the attachment; after a while
+    // also look at the socket, in case the daemon died without saying so.
+    RequireAttached(now - start > std::chrono::milliseconds(100));
     if (now >= deadline) return false;
     if (now < spin_end) continue;
-    WaitForResponse(seen, deadline);
+    // The daemon bumps the word and wakes after every response, and when it
+    // ends the attachment. A short timeout also notices a daemon that died.
+    const auto wait = std::min<Deadline::duration>(deadline - now, std::chrono::milliseconds(200));
+    shm::FutexWait(futex, seen, std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count());
   }
 }
 
@@ -189,13 +171,12 @@ bool ShmClient::ReceiveKind(Envelope::KindCase kind, Envelope& out, Deadline dea
 proto::Welcome ShmClient::Hello(const std::string& client_name, Duration timeout, uint32_t protocol_version) {
   const Deadline deadline = std::chrono::steady_clock::now() + timeout;
   const Envelope hello = detail::HelloRequest(client_name, protocol_version);
-  had_entry_ = false;  // a Hello may legitimately find our old entry gone
+  if (frames_ && !attached()) Attach();  // the daemon ended the last attachment: a new one
   SendEnvelope(hello);
   Envelope reply;
   if (!ReceiveKind(Envelope::kWelcome, reply, deadline)) {
     throw ConnectionError("timed out after " + std::to_string(timeout.count()) +
-                          " ms waiting for Welcome from sim4cvd over shared memory " + name_ +
-                          " (is the daemon serving its maximum number of shared-memory clients?)");
+                          " ms waiting for Welcome from sim4cvd over shared memory " + name_);
   }
   return reply.welcome();
 }
