@@ -115,6 +115,14 @@ inline constexpr uint32_t kReservedDescriptors = 64;
 // most one warning per interval, with the count.
 inline constexpr uint32_t kAcceptRetryMs = 100;
 inline constexpr uint32_t kAcceptErrorLogIntervalMs = 10000;
+// Commands from every client waiting for the sim thread. Steps, Configures
+// and Subscribes are bounded per client above (and by their replies), but
+// Controls and TrackerOutputs need no answer: a client can send millions a
+// second, and while the sim thread is busy (a LoadMap) they would pile up.
+// Past this, they are dropped with a non-fatal INVALID_STATE Error (whose
+// replies then hold the sender back, kReplyBacklogBytes). About 200 bytes
+// each: 16384 hold ~3 MiB.
+inline constexpr std::size_t kMaxQueuedCommands = 16384;
 
 // --- frames held for clients ---
 

@@ -206,8 +206,10 @@ Outcome ClientProtocol::HandleControls(const proto::Controls& controls, proto::E
     if (!problem.empty()) return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
   }
   // Whether entity_id is a car the sim thread checks, and answers an Error through the link if not.
-  context_.commands.Post({client_, ControlsCommand{controls.entity_id(), controls.steering(), controls.throttle(),
-                                                   controls.brake(), link_.lock()}});
+  if (!context_.commands.TryPost({client_, ControlsCommand{controls.entity_id(), controls.steering(),
+                                                          controls.throttle(), controls.brake(), link_.lock()}})) {
+    return RefuseBusy("Controls", reply);
+  }
   return Outcome::kNoReply;
 }
 
@@ -220,9 +222,19 @@ Outcome ClientProtocol::HandleTrackerOutput(const proto::TrackerOutput& output, 
         CheckRange("TrackerOutput.confidence", output.confidence(), 0, 1)}) {
     if (!problem.empty()) return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
   }
-  context_.commands.Post({client_, TrackerOutputCommand{output.frame_id(), box.x(), box.y(), box.width(), box.height(),
-                                                        output.confidence()}});
+  if (!context_.commands.TryPost({client_, TrackerOutputCommand{output.frame_id(), box.x(), box.y(), box.width(),
+                                                                box.height(), output.confidence()}})) {
+    return RefuseBusy("TrackerOutput", reply);
+  }
   return Outcome::kNoReply;
+}
+
+Outcome ClientProtocol::RefuseBusy(const char* what, proto::Envelope& reply) {
+  return Refuse(proto::ERROR_CODE_INVALID_STATE,
+                std::string("this ") + what + " was dropped: " + std::to_string(limits::kMaxQueuedCommands) +
+                    " commands already wait for the simulation (limits::kMaxQueuedCommands); send at most one per "
+                    "frame",
+                false, reply);
 }
 
 Outcome ClientProtocol::HandleGetState(proto::Envelope& reply) {

@@ -62,6 +62,8 @@ class ClientProtocol {
   Outcome HandleStep(proto::Envelope& reply);
   Outcome HandleControls(const proto::Controls& controls, proto::Envelope& reply);
   Outcome HandleTrackerOutput(const proto::TrackerOutput& output, proto::Envelope& reply);
+  // The command queue is full (CommandQueue::TryPost): `what` was dropped.
+  Outcome RefuseBusy(const char* what, proto::Envelope& reply);
   Outcome HandleGetState(proto::Envelope& reply);
   Outcome HandleGetStats(proto::Envelope& reply);
   Outcome HandleConfigure(const proto::Configure& request, proto::Envelope& reply);

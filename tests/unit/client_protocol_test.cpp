@@ -411,6 +411,29 @@ TEST_F(ClientProtocolTest, ControlsForAnyEntityGoToTheSimThreadWithTheLink) {
   EXPECT_EQ(controls.link, link_);
 }
 
+// Controls and TrackerOutput need no answer, so nothing else holds a flood
+// back while the sim thread is busy: the queue refuses them past its bound.
+TEST_F(ClientProtocolTest, ControlsAndTrackerOutputsPastTheQueueBoundAreDroppedWithAnError) {
+  Handshake();
+  for (std::size_t i = 0; i < limits::kMaxQueuedCommands; ++i) {
+    ASSERT_EQ(Send(Controls(1, 0, 0.5f, 0)), Outcome::kNoReply) << i;
+  }
+  const auto expect_dropped = [&](Outcome outcome, const std::string& what) {
+    EXPECT_EQ(outcome, Outcome::kReply);
+    EXPECT_EQ(reply_.error().code(), proto::ERROR_CODE_INVALID_STATE);
+    EXPECT_FALSE(reply_.error().fatal());
+    for (const std::string& part :
+         {"this " + what + " was dropped", std::string("16384 commands already wait"),
+          std::string("limits::kMaxQueuedCommands")}) {
+      EXPECT_NE(reply_.error().message().find(part), std::string::npos) << reply_.error().message();
+    }
+  };
+  expect_dropped(Send(Controls(1, 0, 0.5f, 0)), "Controls");
+  expect_dropped(Send(Tracker(1, 0, 0, 10, 10, 1)), "TrackerOutput");
+  EXPECT_EQ(Drain().size(), limits::kMaxQueuedCommands) << "the refused ones were posted";
+  EXPECT_EQ(Send(Controls(1, 0, 0.5f, 0)), Outcome::kNoReply) << "the sim thread drained: room again";
+}
+
 TEST_F(ClientProtocolTest, ControlsOutOfRangeNameTheField) {
   Handshake();
   struct Case {
