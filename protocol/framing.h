@@ -13,7 +13,9 @@ inline constexpr uint32_t kProtocolVersion = 1;
 // Bytes of the length prefix before each envelope on TCP.
 inline constexpr std::size_t kLengthPrefixBytes = 4;
 
-// Default upper bound on one envelope's size; larger prefixes are refused.
+// Clients' default upper bound on one envelope they receive (a frame with every
+// channel at 1920x1080 is about 19 MB); larger prefixes are refused. What the
+// daemon accepts from clients is limits::kDefaultMaxMessageBytes (--max-message-bytes).
 inline constexpr uint32_t kDefaultMaxMessageBytes = 64u << 20;
 
 // Writes `size` little-endian into out[0..3].

@@ -95,6 +95,12 @@ void SimThread::Stop() {
   commands_.Wake();
   if (thread_.joinable()) thread_.join();
   if (logger_) logger_->Close();
+  // Let go of every client link (subscriptions, commands still queued): the
+  // sessions behind them must die with their transports, whose I/O objects
+  // cannot outlive the transport's io_context (found by the ASan build).
+  scheduler_.DropCamerasFrom(0);
+  commands_.Drain(drained_);
+  drained_.clear();
 }
 
 void SimThread::Run() {

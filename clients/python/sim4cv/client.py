@@ -30,7 +30,7 @@ from .world import WorldRequests
 
 PROTOCOL_VERSION = 1
 LENGTH_PREFIX_BYTES = 4
-DEFAULT_MAX_MESSAGE_BYTES = 64 << 20  # the daemon's default --max-message-bytes
+DEFAULT_MAX_MESSAGE_BYTES = 64 << 20  # what we accept from the daemon: frames can be tens of MB
 
 _PREFIX = struct.Struct("<I")
 

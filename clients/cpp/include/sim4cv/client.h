@@ -170,7 +170,7 @@ class Client {
   bool ReceiveEnvelope(proto::Envelope& envelope, Duration timeout);
 
   // Envelopes the server announces as larger than this are refused with a
-  // ConnectionError (default: wire::kDefaultMaxMessageBytes, the daemon's).
+  // ConnectionError (default: wire::kDefaultMaxMessageBytes, 64 MiB: frames can be tens of MB).
   void set_max_message_bytes(uint32_t bytes) { max_message_bytes_ = bytes; }
   uint32_t max_message_bytes() const { return max_message_bytes_; }
 
