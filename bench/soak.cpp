@@ -200,7 +200,11 @@ class Soak {
             ++counters_.udp_incomplete;
             client.Step();
           }
-          if (!received) return Lost(name);
+          if (!received) {
+            return Lost(name + " (UDP frames completed " + std::to_string(client.frames_completed()) +
+                        ", dropped incomplete " + std::to_string(client.frames_dropped_incomplete()) +
+                        ", chunks ignored " + std::to_string(client.chunks_ignored()) + ")");
+          }
           ++counters_.lockstep_frames;
         }
         return;
@@ -407,7 +411,7 @@ int main(int argc, char** argv) {
   if (options.port == 0) {
     options.shm_name = "sim4cv-soak-" + std::to_string(getpid());
     daemon = std::make_unique<testing::DaemonProcess>(std::vector<std::string>{
-        "--udp-port", "0", "--shm-name", options.shm_name, "--udp-expiry-ms", "2000"});
+        "--udp-port", "0", "--shm-name", options.shm_name});
     options.port = daemon->tcp_port();
     options.udp_port = static_cast<uint16_t>(std::stoi(testing::ListeningField(daemon->listening_line(), "udp")));
     options.pid = daemon->pid();
