@@ -256,6 +256,9 @@ class Soak {
   bool WaitForNext(const ShmClient& client, uint64_t published) const {
     const auto give_up = Clock::now() + deadline();
     while (Published(client) == published) {
+      // Expired by the daemon (silent past --shm-expiry-ms while lockstep
+      // waited for someone else): disconnected, not a lost frame.
+      if (!client.attached()) throw ConnectionError("the daemon ended the attachment while the client waited for its frame");
       if (Clock::now() >= give_up) return false;
       client.WaitForFrame(client.newest_frame_id(), 100ms);
     }
@@ -410,8 +413,12 @@ int main(int argc, char** argv) {
   std::unique_ptr<testing::DaemonProcess> daemon;
   if (options.port == 0) {
     options.shm_name = "sim4cv-soak-" + std::to_string(getpid());
+    // A UDP client says no goodbye: a lockstep one that left holds every
+    // lockstep client back until its --udp-expiry-ms. Under the shm expiry
+    // (5000), so that shm clients waiting for that frame (silent meanwhile)
+    // are not expired in turn.
     daemon = std::make_unique<testing::DaemonProcess>(std::vector<std::string>{
-        "--udp-port", "0", "--shm-name", options.shm_name});
+        "--udp-port", "0", "--shm-name", options.shm_name, "--udp-expiry-ms", "2000"});
     options.port = daemon->tcp_port();
     options.udp_port = static_cast<uint16_t>(std::stoi(testing::ListeningField(daemon->listening_line(), "udp")));
     options.pid = daemon->pid();
