@@ -126,6 +126,27 @@ inline constexpr std::size_t kMaxQueuedCommands = 16384;
 
 // --- frames held for clients ---
 
+// Steps a lockstep client may send ahead of the frames it has received; one
+// more is refused (INVALID_STATE, not fatal). Steps are counters, so this
+// bounds no memory by itself: kLockstepFramesQueued does.
+inline constexpr std::size_t kMaxOutstandingSteps = 64;
+
+// Rendered frames waiting in one lockstep client's mailbox (besides the one
+// its transport is sending). While the mailbox is full the client is not
+// ready, so a lockstep simulation waits for it to read, as it waits for its
+// Steps: a client that Steps 64 times and never reads holds at most
+// kLockstepFramesQueued + 1 frames (at 1920x1080 with all channels, 19 MB
+// each), not 64. Two keep a pipelining client's next frame rendered while it
+// reads the last one.
+inline constexpr std::size_t kLockstepFramesQueued = 2;
+
+// The frame pool gives back what a burst left behind: once a second
+// (kFramePoolTrimPeriodMs) the sim thread frees the free frames beyond the
+// most that were in use since the last trim, plus kFramePoolSpare. Frames in
+// steady use are never freed, so steady state allocates nothing.
+inline constexpr std::size_t kFramePoolSpare = 2;
+inline constexpr int64_t kFramePoolTrimPeriodMs = 1000;
+
 // --- shared memory ---
 // The request ring, response ring and message sizes of a client's area are
 // layout constants (protocol/shm_layout.h: kShmRequestCapacity 64 requests of

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <future>
 
+#include "server/common/limits.h"
 #include "server/common/log.h"
 #include "server/daemon/state_message.h"
 #include "server/render/gl_context.h"
@@ -160,6 +161,8 @@ void SimThread::BuildGraphics() {
 }
 
 void SimThread::ApplyCommands() {
+  // A burst's frames go back to the system (at most once a period; ref_pool.h).
+  frame_pool_.Trim(limits::kFramePoolSpare, std::chrono::milliseconds(limits::kFramePoolTrimPeriodMs));
   commands_.Drain(drained_);
   for (auto& command : drained_) {
     const session::ClientId client = command.client;
@@ -190,7 +193,7 @@ void SimThread::ApplyCommands() {
 void SimThread::Subscribe(session::ClientId client, session::SubscribeCommand& subscribe) {
   const auto& cameras = sim_.cameras();
   if (subscribe.camera_index < cameras.size() && !cameras[subscribe.camera_index].name.empty()) {
-    scheduler_.Subscribe(client, subscribe.camera_index, subscribe.delivery, std::move(subscribe.link));
+    scheduler_.Subscribe(client, subscribe.camera_index, subscribe.delivery, std::move(subscribe.link), subscribe.gate);
     return;
   }
   // The camera went (RemoveCamera, Remove, Reset, LoadMap) between the

@@ -177,8 +177,9 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
   subscription_.set_camera(subscribe.camera());
   *subscription_.mutable_channels() = subscribe.channels();
   subscription_.set_delivery(delivery);
-  mailbox_.Reset(delivery);
-  context_.commands.Post({client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, link_.lock()}});
+  mailbox_.Reset(delivery, &context_.commands);
+  context_.commands.Post(
+      {client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, link_.lock(), mailbox_.gate()}});
   *reply.mutable_subscribed() = subscription_;
   return Outcome::kReply;
 }

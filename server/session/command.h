@@ -16,6 +16,8 @@ namespace sim4cv::session {
 
 using ClientId = uint32_t;
 
+class MailboxGate;  // frame_mailbox.h
+
 // Ids unique across all transports of the process, from 1.
 inline ClientId NewClientId() {
   static std::atomic<ClientId> next{1};
@@ -26,6 +28,7 @@ struct SubscribeCommand {
   uint32_t camera_index = 0;
   proto::Delivery delivery = proto::DELIVERY_NEWEST;
   std::shared_ptr<ClientLink> link;  // where frames go
+  std::shared_ptr<const MailboxGate> gate = nullptr;  // lockstep: whether the client's mailbox is full
 };
 
 struct StepCommand {};

@@ -11,16 +11,17 @@ Scheduler::Subscription* Scheduler::Find(ClientId client) {
 }
 
 void Scheduler::Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery,
-                          std::shared_ptr<ClientLink> link) {
+                          std::shared_ptr<ClientLink> link, std::shared_ptr<const MailboxGate> gate) {
+  Subscription subscription{client, camera_index, delivery, 0, std::move(link), std::move(gate)};
   Subscription* existing = Find(client);
   if (existing) {
     // A replaced subscription keeps no credits: they were for the old one.
-    *existing = {client, camera_index, delivery, 0, std::move(link)};
+    *existing = std::move(subscription);
     return;
   }
   const auto position = std::lower_bound(subscriptions_.begin(), subscriptions_.end(), client,
                                          [](const Subscription& s, ClientId id) { return s.client < id; });
-  subscriptions_.insert(position, {client, camera_index, delivery, 0, std::move(link)});
+  subscriptions_.insert(position, std::move(subscription));
 }
 
 void Scheduler::AddStep(ClientId client) {
@@ -36,7 +37,7 @@ bool Scheduler::LockstepReady() const {
   bool any_lockstep = false;
   for (const auto& s : subscriptions_) {
     if (s.delivery != proto::DELIVERY_LOCKSTEP || Dead(s.camera_index)) continue;
-    if (s.step_credits == 0) return false;
+    if (s.step_credits == 0 || (s.gate && s.gate->full())) return false;
     any_lockstep = true;
   }
   return any_lockstep;

@@ -8,12 +8,15 @@
 #include <vector>
 
 #include "server/session/command.h"
+#include "server/session/frame_mailbox.h"
 
 namespace sim4cv::session {
 
 class Scheduler {
  public:
-  void Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery, std::shared_ptr<ClientLink> link);
+  // `gate` (may be null) tells whether the client's lockstep mailbox is full.
+  void Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery, std::shared_ptr<ClientLink> link,
+                 std::shared_ptr<const MailboxGate> gate = nullptr);
   // One Step from a lockstep subscriber: one credit. Others are ignored (the
   // transport has already refused them).
   void AddStep(ClientId client);
@@ -21,7 +24,10 @@ class Scheduler {
   void Remove(ClientId client);
 
   // Lockstep rule: at least one lockstep subscriber, and every one of them
-  // holds a credit.
+  // holds a credit and has room in its mailbox (fewer than
+  // limits::kLockstepFramesQueued frames waiting): a client that does not
+  // read holds the simulation back, as one that does not Step does, instead
+  // of making the daemon render and keep frames for it.
   bool LockstepReady() const;
   // Takes one credit from every lockstep subscriber.
   void ConsumeSteps();
@@ -60,6 +66,7 @@ class Scheduler {
     proto::Delivery delivery = proto::DELIVERY_NEWEST;
     uint64_t step_credits = 0;
     std::shared_ptr<ClientLink> link;
+    std::shared_ptr<const MailboxGate> gate;
   };
   Subscription* Find(ClientId client);
   void OfferToSubscribers(const FrameRef& frame) const;

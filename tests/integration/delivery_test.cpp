@@ -1,6 +1,8 @@
 // Realtime mode and newest-frame delivery: slow clients drop frames (counted),
 // a client that stops reading never slows the simulation or other clients.
+#include <algorithm>
 #include <chrono>
+#include <iostream>
 #include <thread>
 
 #include "tests/integration/daemon_fixture.h"
@@ -58,6 +60,17 @@ TEST_F(DaemonTest, SlowNewestFrameClientDropsAndCountsFrames) {
   EXPECT_GT(next.frame_id(), after_pause);
 }
 
+// What the design guarantees (docs/architecture.md, "Threads"): the sim thread
+// only offers frames to a mailbox (newest delivery replaces the waiting one)
+// and the TCP thread never blocks on one socket, so a client that stops
+// reading holds back neither the simulation nor another client. It does not
+// promise that a reader on a busy machine gets every frame: newest-frame
+// delivery drops one the reader was too slow for (counted), so the reader's
+// drops are allowed. The bounds are generous, for a loaded 2-core machine:
+// over 3 s at 30 Hz (90 frames), the simulation makes at least a third of
+// them, the reader receives at least half of what was made, and no frame
+// reaches it later than 1 s after it was rendered, nor does it wait 1 s for
+// the next. A stall behind the stuck client would break all of them.
 TEST_F(DaemonTest, ClientThatStopsReadingDoesNotSlowOthers) {
   StartDaemon({"--mode", "realtime", "--frame-hz", "30"});
   auto stuck = Connect("stuck");
@@ -67,16 +80,42 @@ TEST_F(DaemonTest, ClientThatStopsReadingDoesNotSlowOthers) {
   proto::Frame frame;
   ASSERT_TRUE(reader->ReceiveFrame(frame, 5000ms));
   const uint64_t first = frame.frame_id();
+  const uint64_t dropped_before = frame.dropped_frames();
+  const auto monotonic_ns = [] {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  };
   const auto start = std::chrono::steady_clock::now();
-  int frames = 0;
-  while (std::chrono::steady_clock::now() - start < 2s) {
-    ASSERT_TRUE(reader->ReceiveFrame(frame, 2000ms));
-    ++frames;
+  auto last_arrival = start;
+  std::chrono::steady_clock::duration longest_wait{};
+  int64_t worst_latency_ns = 0;
+  uint64_t received = 0;
+  while (std::chrono::steady_clock::now() - start < 3s) {
+    ASSERT_TRUE(reader->ReceiveFrame(frame, 5000ms)) << "the reader got nothing for 5 s";
+    const auto now = std::chrono::steady_clock::now();
+    longest_wait = std::max(longest_wait, now - last_arrival);
+    last_arrival = now;
+    // Same host, same clock (CLOCK_MONOTONIC): render end to arrival.
+    worst_latency_ns = std::max(worst_latency_ns, monotonic_ns() - frame.render_end_mono_ns());
+    ++received;
   }
-  // 2 s at 30 Hz is 60 frames; the stuck client's full socket must not matter.
-  EXPECT_GE(frame.frame_id() - first, 50u);
-  EXPECT_GE(frames, 45);
-  EXPECT_EQ(frame.dropped_frames(), 0u) << "a reader that keeps up should not drop";
+  const uint64_t produced = frame.frame_id() - first;
+  const uint64_t dropped = frame.dropped_frames() - dropped_before;
+  const auto wait_ms = std::chrono::duration_cast<std::chrono::milliseconds>(longest_wait).count();
+  std::cout << "[ numbers  ] produced " << produced << ", received " << received << ", dropped " << dropped
+            << ", longest wait " << wait_ms << " ms, worst latency " << worst_latency_ns / 1000000 << " ms\n";
+  EXPECT_GE(produced, 30u) << "the simulation was held back";
+  EXPECT_GE(2 * received, produced) << "the reader got under half the frames (" << dropped << " dropped)";
+  EXPECT_LT(wait_ms, 1000) << "the reader waited that long for a frame";
+  EXPECT_LT(worst_latency_ns, 1'000'000'000) << "a frame reached the reader that late";
+  // The stuck client really was stuck: once it reads again, its frames count
+  // the ones its full socket made it miss.
+  uint64_t stuck_dropped = 0;
+  for (int i = 0; i < 200 && stuck_dropped == 0; ++i) {
+    ASSERT_TRUE(stuck->ReceiveFrame(frame, 5000ms));
+    stuck_dropped = frame.dropped_frames();
+  }
+  EXPECT_GT(stuck_dropped, 0u);
 }
 
 }  // namespace

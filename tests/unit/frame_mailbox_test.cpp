@@ -3,8 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <thread>
 #include <vector>
 
+#include "server/session/command_queue.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::session {
@@ -66,9 +69,11 @@ TEST_F(FrameMailboxTest, NewestTakeOrderOverManyRounds) {
   EXPECT_LE(pool_.size(), 2u);
 }
 
-TEST_F(FrameMailboxTest, LockstepQueuesInFifoOrderUpToTheBacklog) {
+TEST_F(FrameMailboxTest, LockstepQueuesInFifoOrderUpToItsCapacity) {
   mailbox_.Reset(proto::DELIVERY_LOCKSTEP);
-  const uint64_t n = FrameMailbox::kMaxLockstepBacklog;
+  const uint64_t n = FrameMailbox::kLockstepCapacity;
+  ASSERT_GE(n, 2u) << "a pipelining client needs its next frame waiting while it reads";
+  ASSERT_LT(n, FrameMailbox::kMaxLockstepBacklog) << "frames held must be fewer than the Steps a client may send";
   for (uint64_t id = 1; id <= n; ++id) EXPECT_FALSE(mailbox_.Offer(MakeFrame(id))) << id;
   EXPECT_EQ(mailbox_.dropped(), 0u);
   for (uint64_t id = 1; id <= n; ++id) {
@@ -79,21 +84,70 @@ TEST_F(FrameMailboxTest, LockstepQueuesInFifoOrderUpToTheBacklog) {
   EXPECT_FALSE(mailbox_.Take());
 }
 
+// The gate the scheduler reads: full exactly while kLockstepCapacity frames
+// wait, whatever the ring's position.
+TEST_F(FrameMailboxTest, LockstepGateIsFullWhileTheQueueIs) {
+  const auto gate = mailbox_.gate();
+  mailbox_.Reset(proto::DELIVERY_LOCKSTEP);
+  uint64_t next_in = 1, next_out = 1;
+  for (int round = 0; round < 10; ++round) {
+    for (std::size_t i = 0; i < FrameMailbox::kLockstepCapacity; ++i) {
+      EXPECT_FALSE(gate->full()) << "round " << round << ", " << i << " waiting";
+      EXPECT_FALSE(mailbox_.Offer(MakeFrame(next_in++)));
+    }
+    EXPECT_TRUE(gate->full()) << "round " << round;
+    // One taken: room again. Then empty it.
+    EXPECT_EQ(mailbox_.Take()->frame_id, next_out++);
+    EXPECT_FALSE(gate->full());
+    while (next_out < next_in) EXPECT_EQ(mailbox_.Take()->frame_id, next_out++);
+  }
+  EXPECT_EQ(mailbox_.dropped(), 0u);
+  // Reset opens it; newest delivery never closes it.
+  for (std::size_t i = 0; i < FrameMailbox::kLockstepCapacity; ++i) mailbox_.Offer(MakeFrame(next_in++));
+  ASSERT_TRUE(gate->full());
+  mailbox_.Reset(proto::DELIVERY_NEWEST);
+  EXPECT_FALSE(gate->full());
+  for (int i = 0; i < 5; ++i) mailbox_.Offer(MakeFrame(next_in++));
+  EXPECT_FALSE(gate->full());
+}
+
+// A full mailbox that gives up a frame wakes the sim thread (waiting in the
+// queue), so a lockstep simulation this client held back goes on at once
+// rather than at the loop's next timeout.
+TEST_F(FrameMailboxTest, TakingFromAFullLockstepMailboxWakesTheQueue) {
+  CommandQueue queue;
+  mailbox_.Reset(proto::DELIVERY_LOCKSTEP, &queue);
+  for (std::size_t i = 0; i < FrameMailbox::kLockstepCapacity; ++i) mailbox_.Offer(MakeFrame(i + 1));
+  std::thread reader([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    mailbox_.Take();
+  });
+  const auto start = std::chrono::steady_clock::now();
+  queue.WaitUntil(start + std::chrono::seconds(30));
+  reader.join();
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20)) << "the Take did not wake the queue";
+  std::vector<Command> drained;
+  queue.Drain(drained);
+  EXPECT_TRUE(drained.empty()) << "a wake-up, not a command";
+}
+
 TEST_F(FrameMailboxTest, LockstepWrapsAroundTheRing) {
   mailbox_.Reset(proto::DELIVERY_LOCKSTEP);
   uint64_t next_in = 1, next_out = 1;
   // Interleave so head and tail go round the ring several times.
-  for (int round = 0; round < 10; ++round) {
-    for (int i = 0; i < 40; ++i) EXPECT_FALSE(mailbox_.Offer(MakeFrame(next_in++)));
-    for (int i = 0; i < 40; ++i) EXPECT_EQ(mailbox_.Take()->frame_id, next_out++);
+  for (int round = 0; round < 40; ++round) {
+    for (std::size_t i = 0; i < FrameMailbox::kLockstepCapacity; ++i) EXPECT_FALSE(mailbox_.Offer(MakeFrame(next_in++)));
+    for (std::size_t i = 0; i < FrameMailbox::kLockstepCapacity; ++i) EXPECT_EQ(mailbox_.Take()->frame_id, next_out++);
   }
   EXPECT_FALSE(mailbox_.Take());
   EXPECT_EQ(mailbox_.dropped(), 0u);
 }
 
 TEST_F(FrameMailboxTest, LockstepOverflowDropsTheOldest) {
+  // The scheduler offers nothing to a full lockstep mailbox; if it did, the
+  // oldest frame would give way rather than the mailbox grow.
   mailbox_.Reset(proto::DELIVERY_LOCKSTEP);
-  const uint64_t n = FrameMailbox::kMaxLockstepBacklog;
+  const uint64_t n = FrameMailbox::kLockstepCapacity;
   for (uint64_t id = 1; id <= n; ++id) mailbox_.Offer(MakeFrame(id));
   EXPECT_TRUE(mailbox_.Offer(MakeFrame(n + 1)));
   EXPECT_EQ(mailbox_.dropped(), 1u);

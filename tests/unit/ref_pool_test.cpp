@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "tests/support/allocation_counter.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::session {
@@ -234,6 +235,81 @@ TEST(RefPoolTest, SharedAcrossThreadsReturnsExactlyOnce) {
     ASSERT_TRUE(NextAcquireIs(pool, address)) << "round " << round;
     ASSERT_EQ(pool.size(), 1u) << "round " << round;
   }
+}
+
+// Trim frees what a burst left once a trim has seen the burst end: the
+// objects beyond the most in use since the previous trim, plus a spare.
+TEST(RefPoolTest, TrimFreesWhatABurstLeft) {
+  Pool pool;
+  {
+    std::vector<Ref> burst;
+    for (int i = 0; i < 40; ++i) burst.push_back(Make(pool, i));
+    EXPECT_EQ(pool.TrimNow(2), 0u) << "all in use";
+  }
+  ASSERT_EQ(pool.size(), 40u);
+  // The burst is within this trim's window: kept, in case it comes again.
+  EXPECT_EQ(pool.TrimNow(2), 0u);
+  EXPECT_EQ(pool.size(), 40u);
+  // A whole window without it: freed down to the spare.
+  EXPECT_EQ(pool.TrimNow(2), 38u);
+  EXPECT_EQ(pool.size(), 2u);
+  // Those left still work, and the pool grows again on demand.
+  std::vector<Ref> again;
+  for (int i = 0; i < 5; ++i) again.push_back(Make(pool, i));
+  EXPECT_EQ(pool.size(), 5u);
+}
+
+TEST(RefPoolTest, TrimNeverFreesObjectsInUse) {
+  Pool pool;
+  std::vector<Ref> held;
+  for (int i = 0; i < 6; ++i) held.push_back(Make(pool, i));
+  held.erase(held.begin() + 3, held.end());  // 3 held, 3 free
+  pool.TrimNow(0);
+  pool.TrimNow(0);
+  EXPECT_EQ(pool.size(), 3u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(held[static_cast<std::size_t>(i)]->value, i);
+  held.clear();
+  pool.TrimNow(0);
+  EXPECT_EQ(pool.size(), 3u) << "in use within this window";
+  pool.TrimNow(0);
+  EXPECT_EQ(pool.size(), 0u);
+}
+
+TEST(RefPoolTest, TrimWaitsForItsPeriod) {
+  Pool pool;
+  { std::vector<Ref> burst{Make(pool, 1), Make(pool, 2), Make(pool, 3)}; }
+  pool.TrimNow(0);  // sees the burst
+  EXPECT_EQ(pool.Trim(0, std::chrono::hours(1)), 3u) << "the first Trim runs at once";
+  { std::vector<Ref> burst{Make(pool, 1), Make(pool, 2), Make(pool, 3)}; }
+  EXPECT_EQ(pool.Trim(0, std::chrono::hours(1)), 0u) << "within the period";
+  EXPECT_EQ(pool.size(), 3u);
+}
+
+// A steady state (the same number in use frame after frame) with a trim per
+// frame allocates nothing: objects in steady use are never freed.
+TEST(RefPoolTest, SteadyStateWithTrimsAllocatesNothing) {
+  Pool pool;
+  const auto frame = [&] {
+    std::vector<Ref> refs;
+    refs.reserve(8);
+    Payload* p = nullptr;
+    for (int i = 0; i < 6; ++i) refs.push_back(pool.Acquire(&p));
+    refs.clear();
+    pool.TrimNow(1);
+  };
+  for (int i = 0; i < 3; ++i) frame();  // warm
+  std::vector<Ref> refs;
+  refs.reserve(8);
+  const std::size_t allocations = ::sim4cv::testing::AllocationsIn([&] {
+    for (int round = 0; round < 100; ++round) {
+      Payload* p = nullptr;
+      for (int i = 0; i < 6; ++i) refs.push_back(pool.Acquire(&p));
+      refs.clear();
+      pool.TrimNow(1);
+    }
+  });
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(pool.size(), 6u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "server/session/frame_mailbox.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::session {
@@ -92,6 +93,59 @@ TEST_F(SchedulerTest, CreditsAccumulate) {
   scheduler_.ConsumeSteps();  // with no credits: stays at zero, no underflow
   EXPECT_FALSE(scheduler_.LockstepReady());
   scheduler_.AddStep(3);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+}
+
+// A link whose frames go into a real mailbox, as the transports' do.
+class MailboxLink : public ClientLink {
+ public:
+  explicit MailboxLink(proto::Delivery delivery) { mailbox.Reset(delivery); }
+  void OfferFrame(const FrameRef& frame) override { mailbox.Offer(frame); }
+  void OfferReply(proto::Envelope) override {}
+  FrameMailbox mailbox;
+};
+
+// A lockstep client that Steps but does not read holds the simulation back
+// once its mailbox is full, however many credits it holds: the daemon renders
+// and keeps at most limits::kLockstepFramesQueued frames for it.
+TEST_F(SchedulerTest, AFullLockstepMailboxHoldsTheSimulationBack) {
+  auto silent = std::make_shared<MailboxLink>(proto::DELIVERY_LOCKSTEP);
+  auto reader = std::make_shared<MailboxLink>(proto::DELIVERY_LOCKSTEP);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, silent, silent->mailbox.gate());
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, reader, reader->mailbox.gate());
+  for (std::size_t i = 0; i < FrameMailbox::kMaxLockstepBacklog; ++i) {
+    scheduler_.AddStep(1);
+    scheduler_.AddStep(2);
+  }
+  uint64_t advanced = 0;
+  while (scheduler_.LockstepReady() && advanced < FrameMailbox::kMaxLockstepBacklog) {
+    scheduler_.ConsumeSteps();
+    scheduler_.Deliver(MakeFrame(++advanced, 0));
+    reader->mailbox.Take();  // the reader keeps up
+  }
+  EXPECT_EQ(advanced, FrameMailbox::kLockstepCapacity) << "frames rendered for a client that never reads";
+  EXPECT_LE(pool_.size(), FrameMailbox::kLockstepCapacity + 1);
+  // It reads one: one more frame may be made, then it waits again.
+  ASSERT_TRUE(silent->mailbox.Take());
+  EXPECT_TRUE(scheduler_.LockstepReady());
+  scheduler_.ConsumeSteps();
+  scheduler_.Deliver(MakeFrame(++advanced, 0));
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  // Gone: it no longer holds anyone back.
+  scheduler_.Remove(1);
+  EXPECT_TRUE(scheduler_.LockstepReady());
+}
+
+// A full mailbox on a dead camera holds nobody back, like missing credits.
+TEST_F(SchedulerTest, AFullMailboxOnADeadCameraDoesNotGate) {
+  auto silent = std::make_shared<MailboxLink>(proto::DELIVERY_LOCKSTEP);
+  scheduler_.Subscribe(1, 1, proto::DELIVERY_LOCKSTEP, silent, silent->mailbox.gate());
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  for (std::size_t i = 0; i < FrameMailbox::kLockstepCapacity; ++i) silent->mailbox.Offer(MakeFrame(i + 1, 1));
+  scheduler_.AddStep(1);
+  scheduler_.AddStep(2);
+  EXPECT_FALSE(scheduler_.LockstepReady());
+  scheduler_.SetCameraDead(1, true);
   EXPECT_TRUE(scheduler_.LockstepReady());
 }
 

@@ -191,6 +191,23 @@ TEST_F(UdpChunkingTest, MissingChunkDropsTheFrameWhenANewerOneOvertakes) {
   EXPECT_EQ(reassembler.chunks_ignored(), 1u);
 }
 
+// LoadMap and Reset start frame ids from 0 again: the next frame (id 1 or
+// 2, lower than the last one finished) is reassembled, not ignored as old.
+TEST_F(UdpChunkingTest, FrameIdsThatStartAgainAreReassembled) {
+  FrameReassembler reassembler(kMaxFrame);
+  const auto before = Chunk(42, 1472);
+  for (const auto& d : before) Feed(reassembler, d);
+  ASSERT_EQ(reassembler.frames_completed(), 1u);
+  const auto late = Chunk(41, 1472);
+  EXPECT_EQ(Feed(reassembler, late[1]), Result::kIgnored);  // a late chunk of an old frame: still ignored
+  const auto restarted = Chunk(1, 1472);
+  for (std::size_t i = 0; i + 1 < restarted.size(); ++i) EXPECT_EQ(Feed(reassembler, restarted[i]), Result::kPending);
+  ASSERT_EQ(Feed(reassembler, restarted.back()), Result::kComplete);
+  EXPECT_EQ(reassembler.frame(), encoded_);
+  EXPECT_EQ(reassembler.frames_completed(), 2u);
+  EXPECT_EQ(Feed(reassembler, restarted[0]), Result::kIgnored);  // a duplicate of the frame just finished
+}
+
 TEST_F(UdpChunkingTest, OlderFrameChunksAreIgnoredWhileANewerOneIsInProgress) {
   FrameReassembler reassembler(kMaxFrame);
   const auto newer = Chunk(21, 1472);

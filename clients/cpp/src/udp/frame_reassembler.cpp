@@ -84,6 +84,12 @@ FrameReassembler::Result FrameReassembler::Add(const ChunkView& chunk) {
       chunk.offset > chunk.frame_bytes || chunk.size > chunk.frame_bytes - chunk.offset) {
     return Ignore();
   }
+  // The first chunk of a frame older than the last finished one, with no
+  // frame in progress: the world's frame ids started again (LoadMap, Reset:
+  // docs/protocol.md 10), since the daemon sends a frame's chunks in order
+  // and only after the previous frame's. Without this, a UDP client stops
+  // receiving frames after another client loads a map (found by the soak).
+  if (!assembling_ && chunk.chunk_index == 0 && chunk.frame_id < finished_up_to_) finished_up_to_ = 0;
   // Already finished (complete, or overtaken and given up), or a late chunk
   // of a frame older than the one in progress.
   if (chunk.frame_id <= finished_up_to_ || (assembling_ && chunk.frame_id < frame_id_)) return Ignore();

@@ -6,7 +6,8 @@
 // chunk 0..chunk_count-1 has arrived; a chunk of a newer frame makes an
 // incomplete older frame count as dropped; chunks that are inconsistent,
 // duplicated, or belong to a frame that is already finished or given up are
-// ignored and counted.
+// ignored and counted; a frame id lower than the last finished one, starting
+// at chunk 0, means the world restarted its frame ids (LoadMap, Reset).
 #pragma once
 
 #include <cstddef>
