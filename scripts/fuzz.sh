@@ -5,6 +5,7 @@
 #                                     leak or timeout (the test command runs this)
 #   bash scripts/fuzz.sh long [N]     each target for N executions (default 10000000), one at a
 #                                     time, logs in build-fuzz/logs/; fails on any finding
+#                                     (FUZZ_MAX_SECONDS=S: at most S seconds per target)
 #   bash scripts/fuzz.sh seeds        rewrite the seed corpora in fuzz/corpus from real messages
 #   bash scripts/fuzz.sh merge        minimize fuzz/corpus with what the runs found (-merge=1)
 # Targets: all by default, or name some in FUZZ_TARGETS="fuzz_map fuzz_runlog".
@@ -70,10 +71,12 @@ short() {
   return $failed
 }
 
+# FUZZ_MAX_SECONDS caps each target's wall-clock time as well (a slow target stops short of N).
 long() {
-  local runs=${1:-10000000} failed=0
+  local runs=${1:-10000000} failed=0 cap=()
+  [ -n "${FUZZ_MAX_SECONDS:-}" ] && cap=(-max_total_time="$FUZZ_MAX_SECONDS")
   for target in $TARGETS; do
-    run "$target" "$BUILD_DIR/logs/$target.long.log" -runs="$runs" || failed=1
+    run "$target" "$BUILD_DIR/logs/$target.long.log" -runs="$runs" "${cap[@]}" || failed=1
   done
   return $failed
 }
