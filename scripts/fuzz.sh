@@ -7,7 +7,7 @@
 #                                     time, logs in build-fuzz/logs/; fails on any finding
 #                                     (FUZZ_MAX_SECONDS=S: at most S seconds per target)
 #   bash scripts/fuzz.sh seeds        rewrite the seed corpora in fuzz/corpus from real messages
-#   bash scripts/fuzz.sh merge        minimize fuzz/corpus with what the runs found (-merge=1)
+#   bash scripts/fuzz.sh merge        minimize fuzz/corpus with what the runs found (-set_cover_merge=1)
 # Targets: all by default, or name some in FUZZ_TARGETS="fuzz_map fuzz_runlog".
 # A finding is written to build-fuzz/findings/<target>/; replay it with build-fuzz/fuzz/<target> FILE.
 set -euo pipefail
@@ -109,7 +109,7 @@ merge() {
     rm -rf "$merged"
     mkdir -p "$merged"
     # shellcheck disable=SC2046
-    "$BUILD_DIR/fuzz/$target" $(flags "$target") -merge=1 "$merged" "fuzz/corpus/$target" \
+    "$BUILD_DIR/fuzz/$target" $(flags "$target") -set_cover_merge=1 "$merged" "fuzz/corpus/$target" \
       "$BUILD_DIR/scratch/$target" > "$BUILD_DIR/logs/$target.merge.log" 2>&1
     rm -rf "fuzz/corpus/$target"
     cp -r "$merged" "fuzz/corpus/$target"
