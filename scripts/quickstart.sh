@@ -36,6 +36,9 @@ demo() {
 run_tests() {
   build
   ctest --test-dir "$BUILD_DIR" --output-on-failure -j2
+  # A short run of every fuzz target (docs/reliability.md, "Fuzzing"): its own clang build.
+  bash scripts/fuzz.sh build
+  bash scripts/fuzz.sh short
 }
 
 case "${1:-}" in

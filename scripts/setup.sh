@@ -10,6 +10,7 @@ PACKAGES=(
   libopencv-dev libopencv-contrib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-protobuf python3-numpy python3-pytest
+  clang libclang-rt-14-dev  # the fuzz build (scripts/fuzz.sh): clang and its libFuzzer/sanitizer runtimes
 )
 
 missing=()
