@@ -12,6 +12,7 @@
 #include "server/common/check.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
+#include "server/common/regular_file.h"
 #include "server/sim/map/map_text.h"
 
 namespace sim4cv::map {
@@ -351,11 +352,8 @@ class Parser {
 Map ParseMap(const std::string& text) { return Parser().Parse(text); }
 
 std::string ReadTextFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  SIM4CV_THROW_UNLESS(in, "cannot open map file '" << path << "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  // A FIFO or device is refused, never waited on (finding 7).
+  return ReadRegularFile(path, "map file", limits::kMaxMapTextBytes, "limits::kMaxMapTextBytes");
 }
 
 Map LoadMapFile(const std::string& path) {
