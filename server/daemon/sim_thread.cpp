@@ -281,6 +281,11 @@ void SimThread::Configure(session::ConfigureCommand& command) {
                "); the world is as it was before it. A smaller map, camera or request may fit (docs/maps.md, "
                "\"Limits\")");
     LOG_WARNING("Configure " << request_id << " failed, world unchanged: " << what);
+  } catch (...) {
+    refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+           "the daemon could not carry out this Configure (an exception of unknown type); the world is as it was "
+           "before it");
+    LOG_WARNING("Configure " << request_id << " failed with an exception of unknown type, world unchanged");
   }
   if (command.link) command.link->OfferReply(std::move(reply));
 }
