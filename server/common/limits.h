@@ -11,6 +11,54 @@ namespace sim4cv::limits {
 
 // --- maps and run logs (values read from files are checked as strictly as the network's) ---
 
+// A map (--map, --scene's map, LoadMap by name or text) is parsed into a
+// Map, a RoadGraph, meshes, Bullet bodies and, with traffic, a TrafficPlan,
+// all on the sim thread while every client's frames wait, and their cost
+// grows with what these bound. Chosen so that the worst map they accept
+// loads in seconds and under a few hundred MB (docs/maps.md, "Limits", has
+// the measurements); every shipped map is far inside them (at most 12x12
+// tiles of 20 m or 5x4 of 50 m, 68 road tiles, 189 objects). A map over one
+// is refused by the parser, naming the line and the limit.
+
+// tile_size, metres (the lower bound, 12 m, is map::kMinTileSize: the car's
+// turning circle). Above 100 m a tile is a long empty road; a huge tile
+// once sized the ground mesh into bad_alloc (issue 14, finding 1).
+inline constexpr double kMaxMapTileSize = 100.0;
+// grid W H: tiles each way. The grid's cells are read and kept as text
+// first, then as one byte each.
+inline constexpr int kMaxMapGridSide = 250;
+// The world a map covers, metres each way (W * tile_size and H *
+// tile_size): the ground mesh has a vertex every 10 m of it, and it stays
+// inside the 2 km ground skirt every camera sees to the horizon.
+inline constexpr double kMaxMapExtentMetres = 3000.0;
+// Road tiles ('#' or a mask): each becomes up to 12 lane segments, a
+// lane-ribbon mesh and, with traffic, crosswalks and kerb slots. A
+// 300x300 all-road grid (90,000 road tiles) took 16 s and 2.9 GB
+// (finding 2).
+inline constexpr int kMaxMapRoadTiles = 1024;
+// 'object' lines: each is a labelled object with its own mesh, drawn by
+// every camera every frame, and its instance id must fit 16 bits beside
+// the traffic's.
+inline constexpr int kMaxMapObjects = 4096;
+// Object coordinates, metres from the origin, each axis: the extent's
+// bound (objects beyond the grid are allowed, as far again as the largest
+// map reaches). Rotations, degrees: one turn either way.
+inline constexpr double kMaxMapObjectCoordinate = kMaxMapExtentMetres;
+inline constexpr double kMaxMapObjectRotationDeg = 360.0;
+// 'route' lines, and tiles per route (a closed route may pass a junction
+// more than once, so a route may list more tiles than the map has).
+inline constexpr int kMaxMapRoutes = 64;
+inline constexpr int kMaxMapRouteTiles = 4 * kMaxMapRoadTiles;
+
+// Poses read from a run log for --replay: every coordinate of a position,
+// linear and angular velocity must be finite and within this, the bound a
+// client's coordinates have (CheckConfigure's "finite": |v| <= 1e6), and an
+// orientation a unit quaternion within kLogQuaternionNormTolerance;
+// anything else (a run whose physics blew up) would reach the renderer's
+// camera maths on the first replayed frame (finding 3). Refused at start.
+inline constexpr double kMaxWorldCoordinate = 1e6;
+inline constexpr double kLogQuaternionNormTolerance = 1e-3;
+
 // --- messages, names and per-client queues ---
 
 // Names a client sends (Hello.client_name, Subscribe.camera, and every name in

@@ -105,6 +105,10 @@ int RunDaemon(const Config& config) {
   for (auto& t : transports) t->Stop();
   transports.clear();  // sessions release their frames before the sim's pools go
   for (const auto& [name, value] : counters.Snapshot()) LOG_INFO("counter " << name << " = " << value);
+  if (sim.failed()) {
+    LOG_ERROR("stopped after the simulation failed (see above); the run log, if any, is closed");
+    return 1;
+  }
   LOG_INFO("stopped cleanly");
   return 0;
 }

@@ -1,7 +1,10 @@
 #include "server/daemon/sim_thread.h"
 
+#include <signal.h>
 #include <time.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <future>
 
@@ -77,7 +80,13 @@ void SimThread::Start() {
       ready.set_exception(std::current_exception());
       return;
     }
-    Run();
+    try {
+      Run();
+    } catch (const std::exception& error) {
+      Fail(error.what());
+    } catch (...) {
+      Fail("an exception of unknown type");
+    }
     // GL objects die on the thread whose context is current.
     renderer_.reset();
     gl_.reset();
@@ -89,6 +98,18 @@ void SimThread::Start() {
     thread_.join();
     throw;
   }
+}
+
+// A frame could not be simulated, rendered or logged (what Configure throws
+// never gets here): the world may be half-stepped, so no frame after it can
+// be trusted. The daemon stops as on SIGTERM, closing the run log, and exits
+// with status 1 (docs/architecture.md, "Failures").
+void SimThread::Fail(const char* what) {
+  LOG_ERROR("the simulation stopped at frame " << sim_.state().frame_id << ": " << what
+                                               << "; sim4cvd shuts down (exit status 1)");
+  failed_ = true;
+  running_ = false;
+  kill(getpid(), SIGTERM);  // to the process: the main thread's sigwait takes it
 }
 
 void SimThread::Stop() {
@@ -152,12 +173,28 @@ void SimThread::BuildGraphics() {
     width = std::max(width, camera.width);
     height = std::max(height, camera.height);
   }
-  renderer_.reset();
-  graphics_ = std::make_unique<render::SceneGraphics>(sim_.scene());
-  renderer_ = std::make_unique<render::Renderer>(graphics_->meshes(), width, height);
+  auto graphics = std::make_unique<render::SceneGraphics>(sim_.scene());
+  auto renderer = std::make_unique<render::Renderer>(graphics->meshes(), width, height);
+  std::vector<uint32_t> unoccluded(graphics->instance_id_bound(), 0);
+  // Nothing below throws; the old renderer dies before the meshes it drew.
+  renderer_ = std::move(renderer);
+  graphics_ = std::move(graphics);
   renderer_width_ = width;
   renderer_height_ = height;
-  unoccluded_pixels_.assign(graphics_->instance_id_bound(), 0);
+  unoccluded_pixels_ = std::move(unoccluded);
+}
+
+bool SimThread::NeedsGraphics(const Simulation::Change& change) const {
+  if (change.new_scene) return true;
+  for (const auto& camera : sim_.cameras()) {
+    if (camera.width > renderer_width_ || camera.height > renderer_height_) return true;
+  }
+  return false;
+}
+
+void SimThread::ForgetClient(session::ClientId client) {
+  auto& reports = sim_.state().tracker_reports;
+  std::erase_if(reports, [client](const sim::TrackerReport& r) { return r.client_id == client; });
 }
 
 void SimThread::ApplyCommands() {
@@ -183,7 +220,10 @@ void SimThread::ApplyCommands() {
                      }
                    },
                    [&](session::ConfigureCommand& c) { Configure(c); },
-                   [&](session::DisconnectCommand&) { scheduler_.Remove(client); },
+                   [&](session::DisconnectCommand&) {
+                     scheduler_.Remove(client);
+                     ForgetClient(client);
+                   },
                },
                command.body);
   }
@@ -214,16 +254,47 @@ void SimThread::ApplyControls(session::ControlsCommand& controls) {
                  sim::AgentList(sim_.state()));
 }
 
+// Any exception out of carrying out a request becomes that client's Error,
+// and the world stays as it was: Simulation::Apply changes nothing when it
+// throws, and the graphics a change needs are built before the change is
+// committed (Undo() otherwise), so what is rendered always matches the world.
 void SimThread::Configure(session::ConfigureCommand& command) {
   proto::Envelope reply;
+  const uint64_t request_id = command.request.request_id();
+  const auto refuse = [&](proto::ErrorCode code, const std::string& message) {
+    reply.Clear();
+    session::ClientProtocol::Refuse(code, message, false, reply);
+    reply.mutable_error()->set_request_id(request_id);
+  };
   try {
     proto::Configured& answer = *reply.mutable_configured();
     const Simulation::Change change = sim_.Apply(command.request, answer);
+    try {
+      if (NeedsGraphics(change)) BuildGraphics();
+    } catch (...) {
+      sim_.Undo();
+      throw;
+    }
+    sim_.Commit();
     AfterChange(change, answer.world());  // only now does the answer hold the world
   } catch (const ConfigureError& refused) {
-    session::ClientProtocol::Refuse(refused.code(), refused.what(), false, reply);
-    reply.mutable_error()->set_request_id(command.request.request_id());
-    LOG_INFO("Configure " << command.request.request_id() << " refused: " << refused.what());
+    refuse(refused.code(), refused.what());
+    LOG_INFO("Configure " << request_id << " refused: " << refused.what());
+  } catch (const std::exception& failed) {
+    // Out of memory building a map's world or meshes, or a value the
+    // checks let through that the world cannot hold: not this client's
+    // fault alone, so the operator hears of it too.
+    const std::string what = failed.what();
+    refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+           "the daemon could not carry out this Configure (" + what +
+               "); the world is as it was before it. A smaller map, camera or request may fit (docs/maps.md, "
+               "\"Limits\")");
+    LOG_WARNING("Configure " << request_id << " failed, world unchanged: " << what);
+  } catch (...) {
+    refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+           "the daemon could not carry out this Configure (an exception of unknown type); the world is as it was "
+           "before it");
+    LOG_WARNING("Configure " << request_id << " failed with an exception of unknown type, world unchanged");
   }
   if (command.link) command.link->OfferReply(std::move(reply));
 }
@@ -237,18 +308,11 @@ void SimThread::AfterChange(const Simulation::Change& change, const proto::World
     tell(scheduler_.DropCamerasFrom(scene_cameras),
          "the camera you subscribed to was removed: the world was reset or a map loaded; subscribe again");
     for (uint32_t i = 0; i < scene_cameras; ++i) scheduler_.SetCameraDead(i, false);
-    BuildGraphics();
     PublishState();
   }
   for (const uint32_t camera : change.removed_cameras) {
     tell(scheduler_.SetCameraDead(camera, true),
          "the camera you subscribed to was removed (it, or the entity it rode, is gone); it sends no more frames");
-  }
-  for (const auto& camera : sim_.cameras()) {
-    if (camera.width > renderer_width_ || camera.height > renderer_height_) {
-      BuildGraphics();
-      break;
-    }
   }
   // The answer already holds the world after the change: publish a copy.
   if (change.world_changed) directory_.Publish(world);

@@ -44,18 +44,30 @@ class SimThread {
 
   // GL_RENDERER of the context (valid after Start).
   const std::string& renderer_name() const { return renderer_name_; }
+  // True once the simulation loop stopped on an exception (docs/architecture.md,
+  // "Failures"): it logged the error and sent the daemon SIGTERM.
+  bool failed() const { return failed_; }
 
  private:
   void Run();
   void RunLockstep();
   void RunRealtime();
+  void Fail(const char* what);
   void ApplyCommands();
   void Subscribe(session::ClientId client, session::SubscribeCommand& subscribe);
   void ApplyControls(session::ControlsCommand& controls);
   void Configure(session::ConfigureCommand& command);
-  // Rebuilds and tells what `change` needs; `world` is the answer's WorldInfo.
+  // Tells the scheduler and the clients what `change` did; `world` is the
+  // answer's WorldInfo. The graphics are already built for it.
   void AfterChange(const Simulation::Change& change, const proto::WorldInfo& world);
+  // Whether the graphics must be rebuilt for the world after `change`: a
+  // new scene, or a camera larger than the render targets.
+  bool NeedsGraphics(const Simulation::Change& change) const;
+  // Builds the meshes and renderer for the current scene and cameras; on a
+  // throw the old ones stay (strong guarantee).
   void BuildGraphics();
+  // Forgets the tracker report of a client that left (finding 6).
+  void ForgetClient(session::ClientId client);
   void AdvanceFrame();
   void RenderCamera(uint32_t camera_index);
   void PublishState();
@@ -80,6 +92,7 @@ class SimThread {
   uint32_t renderer_width_ = 0, renderer_height_ = 0;
   std::string renderer_name_;
   std::atomic<bool> running_{false};
+  std::atomic<bool> failed_{false};
   std::thread thread_;
 };
 

@@ -42,6 +42,24 @@ Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> s
   if (!config.replay_file.empty()) replay_ = LoadReplayTrack(config, *scene);
   Change ignored;
   Rebuild(std::move(scene), ignored);
+  Commit();
+}
+
+void Simulation::Commit() {
+  replaced_.reset();
+  camera_added_ = false;
+}
+
+void Simulation::Undo() {
+  if (replaced_) {
+    scene_ = std::move(replaced_->scene);
+    world_ = std::move(replaced_->world);
+    state_ = std::move(replaced_->state);
+    cameras_ = std::move(replaced_->cameras);
+  } else if (camera_added_) {
+    cameras_.pop_back();
+  }
+  Commit();
 }
 
 int Simulation::FindCamera(const std::string& name) const {
@@ -53,18 +71,24 @@ int Simulation::FindCamera(const std::string& name) const {
 }
 
 void Simulation::Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change) {
-  // The new World is built before the old one goes, so a throw leaves the old in place.
+  // Everything new is built before anything old is touched, so a throw
+  // (std::invalid_argument from a pose, std::bad_alloc) leaves the old world
+  // in place; the old one is kept until Commit() for Undo().
   auto world = std::make_unique<sim::World>(*scene);
   if (replay_) world->SetReplay(replay_, config_.replay_only);
+  sim::State state = world->InitialState();
+  std::vector<sim::CameraSpec> cameras = scene->cameras;
+  replaced_.emplace(Replaced{std::move(scene_), std::move(world_), std::move(state_), std::move(cameras_)});
   world_ = std::move(world);
   scene_ = std::move(scene);
-  state_ = world_->InitialState();
-  cameras_ = scene_->cameras;
+  state_ = std::move(state);
+  cameras_ = std::move(cameras);
   change.new_scene = true;
 }
 
 Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Configured& answer) {
   using Kind = proto::Configure::RequestCase;
+  Commit();  // an Apply can be undone only until the next one
   Change change;
   answer.set_request_id(request.request_id());
   switch (request.request_case()) {
@@ -103,7 +127,12 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
     case Kind::REQUEST_NOT_SET:
       throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "Configure carries no request");
   }
-  FillWorldInfo(*answer.mutable_world());
+  try {
+    FillWorldInfo(*answer.mutable_world());
+  } catch (...) {
+    Undo();  // no half-carried-out LoadMap, Reset or AddCamera
+    throw;
+  }
   return change;
 }
 
@@ -294,6 +323,7 @@ void Simulation::AddCamera(const proto::AddCamera& camera) {
                              std::to_string(kMaxCameraIndices) + "); remove one, or Reset");
   }
   cameras_.push_back(std::move(spec));
+  camera_added_ = true;
 }
 
 void Simulation::RemoveCamera(const std::string& name, Change& change) {

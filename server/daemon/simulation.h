@@ -5,6 +5,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -51,8 +52,16 @@ class Simulation {
     bool world_changed = true;
   };
   // Carries out `request` and fills `answer`, or throws ConfigureError
-  // (changing nothing then).
+  // (changing nothing then). Whatever else it throws (std::bad_alloc while
+  // building a map's world, say) also leaves the world as it was.
   Change Apply(const proto::Configure& request, proto::Configured& answer);
+  // After an Apply: Commit() forgets the world it replaced; Undo() puts it
+  // back (the scene, World, State and cameras before a LoadMap or Reset, or
+  // the cameras before an AddCamera), for when the sim thread cannot build
+  // the graphics the change needs. Other requests need no undo: nothing
+  // the sim thread builds afterwards depends on them.
+  void Commit();
+  void Undo();
 
   // The world's entities, cameras and routes as a client sees them.
   void FillWorldInfo(proto::WorldInfo& out) const;
@@ -73,7 +82,17 @@ class Simulation {
   // Throws INVALID_STATE naming --log if the daemon writes a run log.
   void RefuseWhileLogging(const char* request, const char* why) const;
 
+  // What Undo() restores; empty unless the last Apply replaced the world.
+  struct Replaced {
+    std::shared_ptr<const sim::Scene> scene;
+    std::unique_ptr<sim::World> world;
+    sim::State state;
+    std::vector<sim::CameraSpec> cameras;
+  };
+
   const Config& config_;
+  std::optional<Replaced> replaced_;
+  bool camera_added_ = false;  // by the last Apply; Undo() removes it
   std::shared_ptr<const sim::Scene> scene_;
   std::unique_ptr<sim::World> world_;
   sim::State state_;

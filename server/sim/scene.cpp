@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "server/common/check.h"
+#include "server/common/limits.h"
+#include "server/common/regular_file.h"
 #include "server/sim/closed_path.h"
 #include "server/sim/map/map_text.h"
 
@@ -175,11 +177,10 @@ void AddTraffic(Scene& scene, traffic::TrafficConfig config) {
 }
 
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height) {
-  std::ifstream in(path);
-  SIM4CV_THROW_UNLESS(in, "cannot open scene file '" << path << "'");
-  std::stringstream text;
-  text << in.rdbuf();
-  return ParseScene(text.str(), camera_width, camera_height);
+  // A FIFO or device is refused, never waited on (finding 7). Scene files
+  // are a few KB; the map text bound is as good a bound as any.
+  return ParseScene(ReadRegularFile(path, "scene file", limits::kMaxMapTextBytes, "limits::kMaxMapTextBytes"),
+                    camera_width, camera_height);
 }
 
 Scene DefaultScene(uint32_t camera_width, uint32_t camera_height) {

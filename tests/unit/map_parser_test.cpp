@@ -129,7 +129,7 @@ TEST(MapParserTest, EveryErrorNamesItsLine) {
       {with({"tile_size inf"}), 6, "'inf' is not finite"},
       {with({"tile_size 20 30"}), 6, "unexpected '30'"},
       {with({"surroundings jungle"}), 6, "surroundings must be desert or urban, not 'jungle'"},
-      {{"sim4cv-map 1", "grid 0 2"}, 2, "grid size must be 1..1000 tiles each way"},
+      {{"sim4cv-map 1", "grid 0 2"}, 2, "grid size must be 1..250 tiles each way (limits::kMaxMapGridSide)"},
       {{"sim4cv-map 1", "grid 3 x"}, 2, "'x' is not a height"},
       {{"sim4cv-map 1", "grid 3 2", "###", "##"}, 4, "grid row 1 has 2 tiles, expected 3"},
       {{"sim4cv-map 1", "grid 3 1", "#x#"}, 3, "'x' is no tile: use '.', '#' or a connection mask 1-9, a-f"},

@@ -117,5 +117,32 @@ TEST_F(SimulationTest, AShippedMapLoadsByNameAndAnswersRoadQueries) {
   EXPECT_EQ(answer_.road().ahead_size(), 4);
 }
 
+// The sim thread undoes a carried-out request whose graphics it cannot
+// build (finding 1): the world is then exactly the one before it.
+TEST_F(SimulationTest, UndoPutsBackTheWorldALoadMapOrAddCameraReplaced) {
+  Apply(SpawnUav("scout"));
+  const std::size_t agents = sim_.state().agents.size();
+  const std::size_t cameras = sim_.cameras().size();
+  proto::Configure load;
+  load.mutable_load_map()->set_name("tracking/easy_urban");
+  EXPECT_TRUE(Apply(load).new_scene);
+  EXPECT_NE(sim_.scene().name, "default");
+  sim_.Undo();
+  EXPECT_EQ(sim_.scene().name, "default");
+  EXPECT_EQ(sim_.state().agents.size(), agents);
+  EXPECT_NE(sim_.state().FindByName("scout"), nullptr);
+  EXPECT_EQ(sim_.cameras().size(), cameras);
+  sim_.world().Step(sim_.state(), 1.0 / 240);  // the old World is whole again
+
+  Apply(AddCamera("fixed", ""));
+  EXPECT_EQ(sim_.cameras().size(), cameras + 1);
+  sim_.Undo();
+  EXPECT_EQ(sim_.cameras().size(), cameras);
+  Apply(AddCamera("fixed", ""));
+  sim_.Commit();
+  sim_.Undo();  // nothing left to undo once committed
+  EXPECT_EQ(sim_.cameras().size(), cameras + 1);
+}
+
 }  // namespace
 }  // namespace sim4cv::daemon

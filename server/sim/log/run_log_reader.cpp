@@ -12,6 +12,7 @@
 #include <cstring>
 
 #include "server/common/check.h"
+#include "server/common/regular_file.h"
 #include "server/sim/log/log_codec.h"
 #include "server/sim/log/sys_error.h"
 
@@ -44,8 +45,8 @@ uint32_t ReadU32(std::span<const uint8_t> bytes, std::size_t offset) {
 }  // namespace
 
 RunLogReader::RunLogReader(const std::string& path) : path_(path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) ThrowErrno(errno, path_, "open");
+  // A FIFO or device is refused, never waited on (finding 7).
+  const int fd = OpenRegularFile(path, O_RDONLY, "run log");
   struct stat info {};
   if (::fstat(fd, &info) != 0) {
     const int error = errno;

@@ -7,6 +7,7 @@
 #include <chrono>
 
 #include "server/common/check.h"
+#include "server/common/regular_file.h"
 #include "server/sim/log/log_codec.h"
 #include "server/sim/log/sys_error.h"
 
@@ -29,8 +30,9 @@ RunLogWriter::RunLogWriter(const std::string& path, const RunLogHeader& header, 
   codec::EncodeFileStart(header_, &buffer_);
   // O_APPEND: after a failed write is cut off by ftruncate, the next write
   // lands at the new end, not at the old offset past a hole.
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
-  if (fd_ < 0) ThrowErrno(errno, path_, "open");
+  // A FIFO or device is refused, never waited on (finding 7).
+  fd_ = OpenRegularFile(path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND, "run log",
+                        FileKinds::kRegularOrCharacterDevice);
   try {
     WriteBuffer("write header");
   } catch (...) {

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "server/common/check.h"
+#include "server/common/limits.h"
 #include "server/sim/map/map_text.h"
 #include "server/sim/map/prng.h"
 
@@ -254,7 +255,13 @@ GeneratorOptions ParseGeneratorArgs(const std::vector<std::string>& args) {
   SIM4CV_THROW_UNLESS(size != !options.layout.empty(), "give either --size or --from");
   SIM4CV_THROW_UNLESS(options.width >= 3 && options.height >= 3 && options.width <= 200 && options.height <= 200,
                       "--size must be 3x3 to 200x200, not " << options.width << "x" << options.height);
-  SIM4CV_THROW_UNLESS(options.tile_size >= kMinTileSize, "--tile-size must be >= " << kMinTileSize);
+  SIM4CV_THROW_UNLESS(options.tile_size >= kMinTileSize && options.tile_size <= limits::kMaxMapTileSize,
+                      "--tile-size must be " << kMinTileSize << ".." << limits::kMaxMapTileSize
+                                             << " (limits::kMaxMapTileSize)");
+  // What the daemon would refuse to load is not generated (docs/maps.md, "Limits").
+  SIM4CV_THROW_UNLESS(std::max(options.width, options.height) * options.tile_size <= limits::kMaxMapExtentMetres,
+                      "--size and --tile-size make a map wider than " << limits::kMaxMapExtentMetres
+                                                                      << " m (limits::kMaxMapExtentMetres)");
   SIM4CV_THROW_UNLESS(!options.name.empty() && options.name.find_first_of(" \t#") == std::string::npos,
                       "--name must be one word without '#'");
   return options;

@@ -1,4 +1,5 @@
 // ParseMap: one pass over the lines, keyword by keyword (docs/maps.md).
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include "server/common/check.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
+#include "server/common/regular_file.h"
 #include "server/sim/map/map_text.h"
 
 namespace sim4cv::map {
@@ -137,11 +139,36 @@ class Parser {
     NoMore(words);
   }
 
-  void ReadName(std::istringstream& words) { map_.name = Word(words, "the map's name"); }
+  void ReadName(std::istringstream& words) { map_.name = Name(words, "the map's name"); }
+
+  // Map and route names reach every client (Welcome, WorldInfo), so they
+  // are as short as the names clients give.
+  std::string Name(std::istringstream& words, const char* what) {
+    std::string name = Word(words, what);
+    SIM4CV_THROW_UNLESS(name.size() <= limits::kMaxNameBytes, Here() << what << " is " << name.size()
+                                                                     << " bytes long; a name has at most "
+                                                                     << limits::kMaxNameBytes
+                                                                     << " (limits::kMaxNameBytes)");
+    return name;
+  }
 
   void ReadTileSize(std::istringstream& words) {
     map_.tile_size = Number(words, "the tile size");
     SIM4CV_THROW_UNLESS(map_.tile_size >= kMinTileSize, Here() << "tile_size must be >= " << kMinTileSize << " m");
+    SIM4CV_THROW_UNLESS(map_.tile_size <= limits::kMaxMapTileSize, Here() << "tile_size must be <= "
+                                                                          << limits::kMaxMapTileSize
+                                                                          << " m (limits::kMaxMapTileSize)");
+    CheckExtent();
+  }
+
+  // Called by both 'grid' and 'tile_size', whichever comes second (before
+  // it, the default tile size or no grid).
+  void CheckExtent() const {
+    const double widest = std::max(map_.width, map_.height) * map_.tile_size;
+    SIM4CV_THROW_UNLESS(widest <= limits::kMaxMapExtentMetres,
+                        Here() << "the map would be " << widest << " m across (" << std::max(map_.width, map_.height)
+                               << " tiles of " << map_.tile_size << " m); a map spans at most "
+                               << limits::kMaxMapExtentMetres << " m each way (limits::kMaxMapExtentMetres)");
   }
 
   void ReadSurroundings(std::istringstream& words) {
@@ -155,8 +182,11 @@ class Parser {
   void StartGrid(std::istringstream& words) {
     map_.width = Integer(Word(words, "the grid width"), "a width");
     map_.height = Integer(Word(words, "the grid height"), "a height");
-    SIM4CV_THROW_UNLESS(map_.width >= 1 && map_.height >= 1 && map_.width <= 1000 && map_.height <= 1000,
-                        Here() << "grid size must be 1..1000 tiles each way");
+    constexpr int kMaxSide = limits::kMaxMapGridSide;
+    SIM4CV_THROW_UNLESS(
+        map_.width >= 1 && map_.height >= 1 && map_.width <= kMaxSide && map_.height <= kMaxSide,
+        Here() << "grid size must be 1.." << kMaxSide << " tiles each way (limits::kMaxMapGridSide)");
+    CheckExtent();
     in_grid_ = true;
   }
 
@@ -168,7 +198,11 @@ class Parser {
     for (char c : row) {
       SIM4CV_THROW_UNLESS(c == '.' || c == '#' || HexValue(c) > 0,
                           Here() << "'" << c << "' is no tile: use '.', '#' or a connection mask 1-9, a-f");
+      road_tiles_ += c == '.' ? 0 : 1;
     }
+    SIM4CV_THROW_UNLESS(road_tiles_ <= limits::kMaxMapRoadTiles,
+                        Here() << "the grid has " << road_tiles_ << " road tiles up to this row; a map has at most "
+                               << limits::kMaxMapRoadTiles << " (limits::kMaxMapRoadTiles)");
     grid_rows_.push_back(row);
     grid_lines_.push_back({line_number_, line_});
   }
@@ -211,18 +245,33 @@ class Parser {
     const auto kind = ObjectKindFromName(name);
     SIM4CV_THROW_UNLESS(kind.has_value(),
                         Here() << "unknown object kind '" << name << "' (house, tree, lantern, park, obstacle)");
+    SIM4CV_THROW_UNLESS(map_.objects.size() < static_cast<std::size_t>(limits::kMaxMapObjects),
+                        Here() << "a map has at most " << limits::kMaxMapObjects
+                               << " objects (limits::kMaxMapObjects)");
     MapObject object;
     object.kind = *kind;
-    object.position.x() = Number(words, "x");
-    object.position.y() = Number(words, "y");
-    object.rotation_deg = Number(words, "the rotation in degrees");
+    constexpr double kReach = limits::kMaxMapObjectCoordinate;
+    object.position.x() = Bounded(Number(words, "x"), kReach, "x", "m (limits::kMaxMapObjectCoordinate)");
+    object.position.y() = Bounded(Number(words, "y"), kReach, "y", "m (limits::kMaxMapObjectCoordinate)");
+    object.rotation_deg = Bounded(Number(words, "the rotation in degrees"), limits::kMaxMapObjectRotationDeg,
+                                  "the rotation", "degrees (limits::kMaxMapObjectRotationDeg)");
     map_.objects.push_back(object);
+  }
+
+  // `value` if it lies in [-bound, bound].
+  double Bounded(double value, double bound, const char* what, const char* unit_and_limit) const {
+    SIM4CV_THROW_UNLESS(std::abs(value) <= bound,
+                        Here() << what << " " << value << " is outside -" << bound << ".." << bound << " "
+                               << unit_and_limit);
+    return value;
   }
 
   void StartRoute(std::istringstream& words) {
     SIM4CV_THROW_UNLESS(map_.width > 0, Here() << "'route' must come after the grid");
+    SIM4CV_THROW_UNLESS(map_.routes.size() < static_cast<std::size_t>(limits::kMaxMapRoutes),
+                        Here() << "a map has at most " << limits::kMaxMapRoutes << " routes (limits::kMaxMapRoutes)");
     Route route;
-    route.name = Word(words, "the route's name");
+    route.name = Name(words, "the route's name");
     const std::string shape = Word(words, "closed or open");
     SIM4CV_THROW_UNLESS(shape == "closed" || shape == "open",
                         Here() << "a route is closed or open, not '" << shape << "'");
@@ -244,6 +293,9 @@ class Parser {
                                                  << map_.height << " grid");
       SIM4CV_THROW_UNLESS(map_.ConnectionsAt(t) != 0, Here() << "route tile " << token << " is not a road tile");
       const std::size_t n = route.tiles.size();
+      SIM4CV_THROW_UNLESS(n < static_cast<std::size_t>(limits::kMaxMapRouteTiles),
+                          Here() << "route '" << route.name << "' has more than " << limits::kMaxMapRouteTiles
+                                 << " tiles (limits::kMaxMapRouteTiles)");
       if (n >= 1) RequireStep(route.tiles[n - 1], t);
       if (n >= 2) RequirePass(route.tiles[n - 2], route.tiles[n - 1], t);
       route.tiles.push_back(t);
@@ -288,6 +340,7 @@ class Parser {
   int line_number_ = 0;
   bool header_seen_ = false;
   bool in_grid_ = false;
+  int road_tiles_ = 0;  // in the grid rows read so far
   std::set<std::string> seen_;
   std::vector<std::string> grid_rows_;
   std::vector<std::pair<int, std::string>> grid_lines_;   // number and text of each grid row
@@ -299,11 +352,8 @@ class Parser {
 Map ParseMap(const std::string& text) { return Parser().Parse(text); }
 
 std::string ReadTextFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  SIM4CV_THROW_UNLESS(in, "cannot open map file '" << path << "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  // A FIFO or device is refused, never waited on (finding 7).
+  return ReadRegularFile(path, "map file", limits::kMaxMapTextBytes, "limits::kMaxMapTextBytes");
 }
 
 Map LoadMapFile(const std::string& path) {

@@ -221,7 +221,12 @@ std::vector<TrafficPlan::LaneCrossing> TrafficPlan::FindCrossings(const Eigen::V
   constexpr double kStep = 0.25;
   for (const map::LaneSegment& segment : graph_.segments()) {
     const map::LaneCurve& curve = segment.curve;
-    if (curve.Project((start + end) / 2).distance > length + 1.0) continue;  // nowhere near
+    // Every point of a curve lies within its length of its start: a cheap
+    // test that skips the far segments before the exact one (trigonometry),
+    // so a large map's plan is not dominated by this loop (issue 14, finding 2).
+    const Eigen::Vector2d mid = (start + end) / 2;
+    if ((curve.pieces().front().start - mid).norm() - curve.length() > length + 1.0) continue;
+    if (curve.Project(mid).distance > length + 1.0) continue;  // nowhere near
     const int samples = static_cast<int>(std::ceil(curve.length() / kStep));
     for (int k = 0; k < samples; ++k) {
       double lo = curve.length() * k / samples, hi = curve.length() * (k + 1) / samples;
