@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <memory>
 #include <vector>
 
@@ -63,6 +64,12 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   SequenceFilter& sequence() { return sequence_; }
   RateLimiter& error_limit() { return error_limit_; }
 
+  // Replies that met a full send buffer, encoded, oldest first: they go
+  // before anything else to this peer (a later frame must not overtake
+  // them). Transport thread only.
+  std::deque<std::string>& unsent_replies() { return unsent_replies_; }
+  std::size_t& unsent_bytes() { return unsent_bytes_; }
+
   void Heard(Clock::time_point now) { last_heard_ = now; }
   Clock::time_point last_heard() const { return last_heard_; }
 
@@ -106,6 +113,8 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   FrameChunker chunker_;
   session::FrameRef frame_in_flight_;
   uint32_t next_chunk_ = 0;
+  std::deque<std::string> unsent_replies_;
+  std::size_t unsent_bytes_ = 0;
 };
 
 }  // namespace sim4cv::transport

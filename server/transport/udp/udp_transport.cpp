@@ -14,6 +14,7 @@
 
 #include "protocol/framing.h"
 #include "server/common/check.h"
+#include "server/common/limits.h"
 #include "server/common/log.h"
 #include "server/transport/udp/udp_counters.h"
 #include "server/transport/udp/udp_peer.h"
@@ -197,7 +198,7 @@ class UdpTransport : public Transport {
           // A repeated Hello: its Welcome may have been lost. Same answer, nothing else changes.
           reply_.Clear();
           session::ClientProtocol::FillWelcome(*context_, peer.client(), *reply_.mutable_welcome());
-          if (Limit(peer, now)) SendReply(peer.address());
+          if (Limit(peer, now)) SendReplyTo(peer);
           return;
         }
         break;
@@ -246,7 +247,7 @@ class UdpTransport : public Transport {
     if (reply_.has_error()) {
       SendError(peer, now);
     } else {
-      SendReply(peer.address());
+      SendReplyTo(peer);
     }
     if (!session::ClientProtocol::EndsConnection(reply_)) return true;
     counters_.Add(UdpCounter::kClosedByError);
@@ -263,7 +264,7 @@ class UdpTransport : public Transport {
   void SendError(UdpPeer& peer, Clock::time_point now) {
     if (!Limit(peer, now)) return;
     counters_.Add(UdpCounter::kErrorsSent);
-    SendReply(peer.address());
+    SendReplyTo(peer);
   }
 
   void ReplyToStranger(const PeerAddress& to, Clock::time_point now) {
@@ -275,17 +276,56 @@ class UdpTransport : public Transport {
     SendReply(to);
   }
 
-  // reply_ as one datagram to `to`. Replies are small; one that meets a full
-  // send buffer is dropped (and counted), and the client's retry asks again.
+  // reply_ as one datagram to an address that is not a registered peer.
+  // One that meets a full send buffer is dropped (and counted): a stranger's
+  // retry asks again.
   void SendReply(const PeerAddress& to) {
     reply_bytes_.clear();
     reply_.AppendToString(&reply_bytes_);
-    const ssize_t sent = sendto(socket_.fd(), reply_bytes_.data(), reply_bytes_.size(), MSG_DONTWAIT,
+    SendDatagram(to, reply_bytes_);
+  }
+
+  // reply_ to a registered peer. Frames fill the send buffer to the brim, so
+  // a reply may meet it full: it then waits in the peer's unsent queue
+  // (bounded like the sim thread's replies, kMaxOfferedReplyBytes) and goes
+  // before that peer's next frame chunk, so no reply is lost to a burst of
+  // frames and none is overtaken by a later frame.
+  void SendReplyTo(UdpPeer& peer) {
+    reply_bytes_.clear();
+    reply_.AppendToString(&reply_bytes_);
+    if (peer.unsent_replies().empty() && SendDatagram(peer.address(), reply_bytes_) >= 0) return;
+    if (!peer.unsent_replies().empty() || errno == EAGAIN || errno == EWOULDBLOCK) {
+      if (peer.unsent_bytes() + reply_bytes_.size() > limits::kMaxOfferedReplyBytes) {
+        counters_.Add(UdpCounter::kSendFailed);  // the client reads nothing: it retries, or expires
+        return;
+      }
+      peer.unsent_bytes() += reply_bytes_.size();
+      peer.unsent_replies().push_back(reply_bytes_);
+    }
+  }
+
+  // Sends what waits in the peer's unsent queue; false while the buffer is full.
+  bool FlushUnsent(UdpPeer& peer) {
+    auto& unsent = peer.unsent_replies();
+    while (!unsent.empty()) {
+      if (SendDatagram(peer.address(), unsent.front()) < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return false;
+      peer.unsent_bytes() -= unsent.front().size();
+      unsent.pop_front();
+    }
+    return true;
+  }
+
+  // One datagram; failures other than a full buffer are counted here.
+  ssize_t SendDatagram(const PeerAddress& to, const std::string& bytes) {
+    const ssize_t sent = sendto(socket_.fd(), bytes.data(), bytes.size(), MSG_DONTWAIT,
                                 reinterpret_cast<const sockaddr*>(&to.storage), to.length);
     if (sent < 0) {
+      const int error = errno;
       counters_.Add(UdpCounter::kSendFailed);
-      LOG_DEBUG("UDP reply to " << to.ToString() << " failed: " << std::strerror(errno));
+      LOG_DEBUG("UDP reply to " << to.ToString() << " failed: " << std::strerror(error));
+      errno = error;
     }
+    return sent;
   }
 
   // Sends frames round-robin, one batch of chunks per client per round.
@@ -295,6 +335,7 @@ class UdpTransport : public Transport {
     while (progress) {
       progress = false;
       for (auto& [address, peer] : peers_) {
+        if (!FlushUnsent(*peer)) return false;
         if (!peer->NextFrame()) continue;
         if (!SendChunks(*peer)) return false;
         progress = true;
