@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's two commands:
 #   bash scripts/quickstart.sh demo   set up, build, run the daemon with a client in the loop
-#   bash scripts/quickstart.sh test   set up, build, run every test (C++, Python)
+#   bash scripts/quickstart.sh test   set up, build, run every test (C++, Python, a short run of each fuzzer)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${SIM4CV_BUILD_DIR:-build}
