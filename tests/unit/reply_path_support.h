@@ -251,7 +251,11 @@ void ExpectRepliesInOrderBeforeLaterFrames(SimStandIn& sim, session::ClientLink&
   uint64_t frames = 0, last_frame = 0;
   while (replies_seen < rounds || last_frame < rounds) {
     proto::Envelope envelope;
-    ASSERT_TRUE(client.ReceiveEnvelope(envelope, 5000ms)) << "after reply " << replies_seen << ", frame " << last_frame;
+    if (!client.ReceiveEnvelope(envelope, 5000ms)) {
+      std::string counters;
+      for (const auto& [name, value] : sim.context().counters.Snapshot()) counters += " " + name + "=" + std::to_string(value);
+      FAIL() << "after reply " << replies_seen << ", frame " << last_frame << "; counters:" << counters;
+    }
     if (envelope.has_state()) {
       ASSERT_EQ(envelope.state().frame_id(), replies_seen + 1) << "a reply was lost or reordered";
       EXPECT_EQ(envelope.sequence(), 0u) << "the daemon never sets Envelope.sequence";
