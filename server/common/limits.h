@@ -11,38 +11,37 @@ namespace sim4cv::limits {
 
 // --- maps and run logs (values read from files are checked as strictly as the network's) ---
 
-// A map (--map, --scene's map, LoadMap by name or text) is parsed into a
-// Map, a RoadGraph, meshes, Bullet bodies and, with traffic, a TrafficPlan,
-// all on the sim thread while every client's frames wait, and their cost
-// grows with what these bound. Chosen so that the worst map they accept
-// loads in seconds and under a few hundred MB (docs/maps.md, "Limits", has
-// the measurements); every shipped map is far inside them (at most 12x12
-// tiles of 20 m or 5x4 of 50 m, 68 road tiles, 189 objects). A map over one
-// is refused by the parser, naming the line and the limit.
+// A map (--map, LoadMap by name or text) is parsed into a Map, a RoadGraph,
+// meshes and, on urban maps or with traffic, a TrafficPlan, all on the sim
+// thread while every client's frames wait; their cost grows with what these
+// bound. The worst map they accept (docs/maps.md, "Limits": 16x16
+// crossroads of 50 m in a 40x40 grid, 2000 objects, 64 routes, urban, with
+// traffic) loads in 3.6 s of CPU and 141 MB peak RSS; a shipped map in
+// 0.2 s and 81 MB. Shipped maps are at most 12x12 tiles of 20 m or 5x4 of
+// 50 m, 68 road tiles, 189 objects. A map over one is refused by the
+// parser, naming the line and the limit.
 
 // tile_size, metres (the lower bound, 12 m, is map::kMinTileSize: the car's
-// turning circle). Above 100 m a tile is a long empty road; a huge tile
-// once sized the ground mesh into bad_alloc (issue 14, finding 1).
-inline constexpr double kMaxMapTileSize = 100.0;
-// grid W H: tiles each way. The grid's cells are read and kept as text
-// first, then as one byte each.
-inline constexpr int kMaxMapGridSide = 250;
+// turning circle). Lanes, crosswalks and their meshes are sampled along a
+// tile, so its cost grows with it; a huge tile once sized the ground mesh
+// into bad_alloc (issue 14, finding 1).
+inline constexpr double kMaxMapTileSize = 50.0;
+// grid W H: tiles each way (the extent below at the smallest tile, 12 m).
+inline constexpr int kMaxMapGridSide = 166;
 // The world a map covers, metres each way (W * tile_size and H *
 // tile_size): the ground mesh has a vertex every 10 m of it, and it stays
-// inside the 2 km ground skirt every camera sees to the horizon.
-inline constexpr double kMaxMapExtentMetres = 3000.0;
-// Road tiles ('#' or a mask): each becomes up to 12 lane segments, a
-// lane-ribbon mesh and, with traffic, crosswalks and kerb slots. A
-// 300x300 all-road grid (90,000 road tiles) took 16 s and 2.9 GB
-// (finding 2).
-inline constexpr int kMaxMapRoadTiles = 1024;
+// inside the 2 km ground skirt (cameras see 1 km).
+inline constexpr double kMaxMapExtentMetres = 2000.0;
+// Road tiles ('#' or a mask): each is up to 12 lane segments, a road mesh
+// and, on urban maps, a junction's lights, crosswalks and their lane
+// crossings (about 10 ms of CPU per crossroads). A 300x300 all-road grid
+// (90,000 road tiles) took 16 s and 2.9 GB (finding 2).
+inline constexpr int kMaxMapRoadTiles = 256;
 // 'object' lines: each is a labelled object with its own mesh, drawn by
-// every camera every frame, and its instance id must fit 16 bits beside
-// the traffic's.
-inline constexpr int kMaxMapObjects = 4096;
-// Object coordinates, metres from the origin, each axis: the extent's
-// bound (objects beyond the grid are allowed, as far again as the largest
-// map reaches). Rotations, degrees: one turn either way.
+// every camera every frame, and checked by the traffic's layout.
+inline constexpr int kMaxMapObjects = 2000;
+// Object coordinates, metres from the origin, each axis (as far again as
+// the largest grid reaches), and rotations, degrees: one turn either way.
 inline constexpr double kMaxMapObjectCoordinate = kMaxMapExtentMetres;
 inline constexpr double kMaxMapObjectRotationDeg = 360.0;
 // 'route' lines, and tiles per route (a closed route may pass a junction

@@ -4,6 +4,7 @@
 
 #include "server/common/check.h"
 #include "server/common/log.h"
+#include "server/sim/log/replay_check.h"
 #include "server/sim/traffic_bodies.h"
 
 namespace sim4cv::daemon {
@@ -129,6 +130,12 @@ void RunLogger::Fail(const std::exception& error) {
 
 std::shared_ptr<const runlog::ReplayTrack> LoadReplayTrack(const Config& config, const sim::Scene& scene) {
   auto track = std::make_shared<const runlog::ReplayTrack>(runlog::ReplayTrack::Load(config.replay_file));
+  try {
+    runlog::CheckReplayValues(*track);  // before any of it reaches the World or a camera
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument("--replay " + config.replay_file + ": " + error.what() +
+                                "; a log is replayed only if every pose is one a client could set");
+  }
   const runlog::RunLogHeader& header = track->header();
   SIM4CV_THROW_UNLESS(header.scene_name == scene.name,
                       config.replay_file << " was recorded on scene '" << header.scene_name << "', not '" << scene.name

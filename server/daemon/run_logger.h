@@ -54,8 +54,10 @@ class RunLogger final : public session::ClientLink {
 };
 
 // Reads the whole of config.replay_file. Throws naming the file if it is
-// missing, not a run log or damaged, or was recorded on another scene or at
-// another frame rate (replay goes by frame id).
+// missing, not a run log or damaged, holds a value a client could not send
+// (runlog::CheckReplayValues: naming the record, frame, entity and field),
+// or was recorded on another scene or at another frame rate (replay goes by
+// frame id).
 std::shared_ptr<const runlog::ReplayTrack> LoadReplayTrack(const Config& config, const sim::Scene& scene);
 
 }  // namespace sim4cv::daemon

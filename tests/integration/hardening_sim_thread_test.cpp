@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "tests/integration/run_log_fixture.h"
+#include "tests/integration/run_to_exit.h"
 #include "tests/support/configure_fixture.h"
 
 namespace sim4cv::testing {
@@ -90,41 +91,6 @@ TEST_F(SimThreadHardeningTest, TrackerOutputsOfDepartedClientsAreForgotten) {
   const std::size_t last_boxes = contents.records.back().tracker_boxes.size();
   EXPECT_EQ(last_boxes, 1u) << "only the stepper's report is left, frame " << contents.records.back().frame_id << "\n"
                             << stderr_text;
-}
-
-// The exit status and stderr of sim4cvd started with `args`, waiting at most
-// 20 s (then SIGKILL: status -1).
-std::pair<int, std::string> RunToExit(const std::vector<std::string>& args) {
-  char path[] = "/tmp/sim4cvd-fifo-XXXXXX";
-  const int err = mkstemp(path);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(err, STDERR_FILENO);
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, STDOUT_FILENO);
-    std::vector<char*> argv{const_cast<char*>(SIM4CVD_PATH)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(SIM4CVD_PATH, argv.data());
-    _exit(127);
-  }
-  close(err);
-  int status = 0;
-  const auto deadline = Clock::now() + 20s;
-  bool killed = false;
-  while (waitpid(pid, &status, WNOHANG) == 0) {
-    if (Clock::now() > deadline) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      killed = true;
-      break;
-    }
-    std::this_thread::sleep_for(20ms);
-  }
-  std::ifstream in(path);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  unlink(path);
-  return {killed || !WIFEXITED(status) ? -1 : WEXITSTATUS(status), text};
 }
 
 // Finding 7: open() on a FIFO without a writer (or reader) blocked the

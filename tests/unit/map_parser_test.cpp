@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "server/common/limits.h"
 #include "server/sim/map/map_text.h"
 #include "tests/support/no_warnings.h"
 #include "tests/unit/map_test_support.h"
@@ -129,7 +130,7 @@ TEST(MapParserTest, EveryErrorNamesItsLine) {
       {with({"tile_size inf"}), 6, "'inf' is not finite"},
       {with({"tile_size 20 30"}), 6, "unexpected '30'"},
       {with({"surroundings jungle"}), 6, "surroundings must be desert or urban, not 'jungle'"},
-      {{"sim4cv-map 1", "grid 0 2"}, 2, "grid size must be 1..250 tiles each way (limits::kMaxMapGridSide)"},
+      {{"sim4cv-map 1", "grid 0 2"}, 2, "grid size must be 1..166 tiles each way (limits::kMaxMapGridSide)"},
       {{"sim4cv-map 1", "grid 3 x"}, 2, "'x' is not a height"},
       {{"sim4cv-map 1", "grid 3 2", "###", "##"}, 4, "grid row 1 has 2 tiles, expected 3"},
       {{"sim4cv-map 1", "grid 3 1", "#x#"}, 3, "'x' is no tile: use '.', '#' or a connection mask 1-9, a-f"},
@@ -152,12 +153,62 @@ TEST(MapParserTest, EveryErrorNamesItsLine) {
       {with({"route r open", "tiles 0,0 1,0"}), 6, "an open route needs at least 3 tiles, has 2"},
       {with({"route r closed"}), 6, "a closed route needs at least 2 tiles, has 0"},
       {with({"route r open", "tiles 0,0 1,0 2,0", "route r closed"}), 8, "route 'r' defined twice"},
+      // Limits (server/common/limits.h, maps): every number that sizes what loading builds.
+      {with({"tile_size 3e9"}), 6, "tile_size must be <= 50 m (limits::kMaxMapTileSize)"},
+      {with({"tile_size 1e300"}), 6, "tile_size must be <= 50 m (limits::kMaxMapTileSize)"},
+      {{"sim4cv-map 1", "grid 1000 1000"}, 2, "grid size must be 1..166 tiles each way (limits::kMaxMapGridSide)"},
+      {{"sim4cv-map 1", "grid 101 3"}, 2,
+       "the map would be 2020 m across (101 tiles of 20 m); a map spans at most 2000 m each way "
+       "(limits::kMaxMapExtentMetres)"},
+      {{"sim4cv-map 1", "grid 41 1", std::string(41, '.'), "end", "tile_size 50"}, 5,
+       "the map would be 2050 m across (41 tiles of 50 m); a map spans at most 2000 m each way "
+       "(limits::kMaxMapExtentMetres)"},
+      {with({"object tree 2000.5 0 0"}), 6, "x 2000.5 is outside -2000..2000 m (limits::kMaxMapObjectCoordinate)"},
+      {with({"object tree 0 -1e9 0"}), 6, "y -1e+09 is outside -2000..2000 m (limits::kMaxMapObjectCoordinate)"},
+      {with({"object tree 0 0 400"}), 6, "the rotation 400 is outside -360..360 degrees (limits::kMaxMapObjectRotationDeg)"},
   };
   for (const BadLine& c : cases) {
     std::string text;
     for (const std::string& line : c.lines) text += line + "\n";
     EXPECT_EQ(ParseError(text), "map line " + std::to_string(c.line) + " '" + c.lines[c.line - 1] + "': " + c.message);
   }
+}
+
+// Counts bounded by limits::kMaxMap*: one more than the limit is refused on
+// the line that goes over it; the limit itself is accepted.
+TEST(MapParserTest, CountsAreBounded) {
+  // Road tiles: 16 rows of 16 '#' is exactly kMaxMapRoadTiles (256); a 17th row goes over.
+  const auto grid = [](int rows) {
+    std::string text = "sim4cv-map 1\nname t\ngrid 16 " + std::to_string(rows) + "\n";
+    for (int r = 0; r < rows; ++r) text += std::string(16, '#') + "\n";
+    return text + "end\n";
+  };
+  EXPECT_EQ(ParseMap(grid(16)).road.size(), 256u);
+  EXPECT_EQ(ParseError(grid(17)), "map line 20 '################': the grid has 272 road tiles up to this row; a map "
+                                  "has at most 256 (limits::kMaxMapRoadTiles)");
+
+  const std::string head = "sim4cv-map 1\nname t\ngrid 3 1\n###\nend\n";
+  std::string objects = head;
+  for (int i = 0; i < limits::kMaxMapObjects; ++i) objects += "object tree 0 30 0\n";
+  EXPECT_EQ(ParseMap(objects).objects.size(), static_cast<std::size_t>(limits::kMaxMapObjects));
+  EXPECT_EQ(ParseError(objects + "object tree 0 30 0\n"),
+            "map line 2006 'object tree 0 30 0': a map has at most 2000 objects (limits::kMaxMapObjects)");
+
+  std::string routes = "sim4cv-map 1\nname t\ngrid 2 1\n##\nend\n";
+  for (int i = 0; i < limits::kMaxMapRoutes; ++i) routes += "route r" + std::to_string(i) + " closed\ntiles 0,0 1,0\n";
+  EXPECT_EQ(ParseMap(routes).routes.size(), static_cast<std::size_t>(limits::kMaxMapRoutes));
+  EXPECT_EQ(ParseError(routes + "route x closed\n"),
+            "map line 134 'route x closed': a map has at most 64 routes (limits::kMaxMapRoutes)");
+
+  EXPECT_NE(ParseError(head + "route " + std::string(65, 'r') + " closed\n")
+                .find("the route's name is 65 bytes long; a name has at most 64 (limits::kMaxNameBytes)"),
+            std::string::npos);
+
+  // A shuttle between two dead ends, back and forth, over the route tile limit.
+  std::string shuttle = "sim4cv-map 1\nname t\ngrid 2 1\n##\nend\nroute s closed\n";
+  for (int i = 0; i < limits::kMaxMapRouteTiles / 2 + 1; ++i) shuttle += "tiles 0,0 1,0\n";
+  EXPECT_NE(ParseError(shuttle).find("route 's' has more than 1024 tiles (limits::kMaxMapRouteTiles)"),
+            std::string::npos);
 }
 
 TEST(MapParserTest, WholeMapErrorsNameTheMap) {
