@@ -15,6 +15,7 @@
 #include "server/common/limits.h"
 #include "tests/integration/daemon_fixture.h"
 #include "tests/integration/raw_connection.h"
+#include "tests/integration/run_to_exit.h"
 
 namespace sim4cv::testing {
 namespace {
@@ -164,43 +165,9 @@ TEST_F(HardeningTcpTimeoutsTest, OutOfDescriptorsTheAcceptLoopWaitsInsteadOfSpin
   ExpectServes();
 }
 
-// The child's stderr and exit status, run with RLIMIT_NOFILE = `limit`.
-std::pair<int, std::string> RunWithDescriptorLimit(const std::vector<std::string>& args, rlim_t soft, rlim_t hard) {
-  char path[] = "/tmp/sim4cvd-nofile-XXXXXX";
-  const int err = mkstemp(path);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const rlimit limit{soft, hard};
-    setrlimit(RLIMIT_NOFILE, &limit);
-    dup2(err, STDERR_FILENO);
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, STDOUT_FILENO);
-    std::vector<char*> argv{const_cast<char*>(SIM4CVD_PATH)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(SIM4CVD_PATH, argv.data());
-    _exit(127);
-  }
-  close(err);
-  int status = 0;
-  const auto deadline = Clock::now() + 20s;
-  while (waitpid(pid, &status, WNOHANG) == 0) {
-    if (Clock::now() > deadline) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      break;
-    }
-    std::this_thread::sleep_for(20ms);
-  }
-  std::ifstream in(path);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  unlink(path);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text};
-}
-
 // Finding 12: --max-clients 100000 was accepted whatever the descriptor limit.
 TEST(DescriptorLimitTest, MaxClientsBeyondTheHardLimitRefusesTheStart) {
-  const auto [status, text] = RunWithDescriptorLimit({"--max-clients", "1000", "--tcp-port", "0"}, 200, 200);
+  const auto [status, text] = RunToExit({"--max-clients", "1000", "--tcp-port", "0"}, rlimit{200, 200});
   EXPECT_EQ(status, 2) << text;
   for (const char* part : {"--max-clients 1000", "1064", "200", "ulimit -n"}) {
     EXPECT_NE(text.find(part), std::string::npos) << part << " in: " << text;

@@ -6,12 +6,14 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <thread>
 #include <utility>
@@ -19,13 +21,15 @@
 
 namespace sim4cv::testing {
 
-// The exit status and stderr of sim4cvd started with `args`, waiting at most
-// 20 s (then SIGKILL: status -1).
-inline std::pair<int, std::string> RunToExit(const std::vector<std::string>& args) {
+// The exit status and stderr of sim4cvd started with `args` (and, if given,
+// that RLIMIT_NOFILE), waiting at most 20 s (then SIGKILL: status -1).
+inline std::pair<int, std::string> RunToExit(const std::vector<std::string>& args,
+                                             std::optional<rlimit> descriptors = std::nullopt) {
   char path[] = "/tmp/sim4cvd-exit-XXXXXX";
   const int err = mkstemp(path);
   const pid_t pid = fork();
   if (pid == 0) {
+    if (descriptors) setrlimit(RLIMIT_NOFILE, &*descriptors);
     dup2(err, STDERR_FILENO);
     const int null = open("/dev/null", O_WRONLY);
     dup2(null, STDOUT_FILENO);

@@ -2,9 +2,12 @@
 // test process, plus helpers shared by the shm integration tests.
 #pragma once
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -52,6 +55,25 @@ class ShmDaemonTest : public DaemonTest {
 
 inline double Speed(const ShmEntityPose& pose) {
   return std::hypot(pose.linear_velocity[0], pose.linear_velocity[1], pose.linear_velocity[2]);
+}
+
+// Runs `body` in a child process; returns its exit code (-1 if it died of a signal).
+template <typename Body>
+inline int InChild(Body body) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    int code = 99;
+    try {
+      code = body();
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "child: %s\n", error.what());
+      code = 98;
+    }
+    _exit(code);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace sim4cv::testing

@@ -29,24 +29,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// Runs `body` in a child process; returns its exit code (-1 if it died of a signal).
-template <typename Body>
-int InChild(Body body) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    int code = 99;
-    try {
-      code = body();
-    } catch (const std::exception& error) {
-      std::fprintf(stderr, "child: %s\n", error.what());
-      code = 98;
-    }
-    _exit(code);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 // A failed call with the expected errno, or a numbered exit code for the child.
 #define CHILD_EXPECT_FAILS(call, error, code) \
