@@ -282,7 +282,7 @@ class UdpTransport : public Transport {
   void SendReply(const PeerAddress& to) {
     reply_bytes_.clear();
     reply_.AppendToString(&reply_bytes_);
-    SendDatagram(to, reply_bytes_);
+    if (SendDatagram(to, reply_bytes_) < 0 && FullBuffer()) counters_.Add(UdpCounter::kSendFailed);
   }
 
   // reply_ to a registered peer. Frames fill the send buffer to the brim, so
@@ -294,7 +294,7 @@ class UdpTransport : public Transport {
     reply_bytes_.clear();
     reply_.AppendToString(&reply_bytes_);
     if (peer.unsent_replies().empty() && SendDatagram(peer.address(), reply_bytes_) >= 0) return;
-    if (!peer.unsent_replies().empty() || errno == EAGAIN || errno == EWOULDBLOCK) {
+    if (!peer.unsent_replies().empty() || FullBuffer()) {
       if (peer.unsent_bytes() + reply_bytes_.size() > limits::kMaxOfferedReplyBytes) {
         counters_.Add(UdpCounter::kSendFailed);  // the client reads nothing: it retries, or expires
         return;
@@ -308,20 +308,24 @@ class UdpTransport : public Transport {
   bool FlushUnsent(UdpPeer& peer) {
     auto& unsent = peer.unsent_replies();
     while (!unsent.empty()) {
-      if (SendDatagram(peer.address(), unsent.front()) < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return false;
+      if (SendDatagram(peer.address(), unsent.front()) < 0 && FullBuffer()) return false;
       peer.unsent_bytes() -= unsent.front().size();
       unsent.pop_front();
     }
     return true;
   }
 
-  // One datagram; failures other than a full buffer are counted here.
+  // Whether the last send failed only because the socket's buffer was full.
+  static bool FullBuffer() { return errno == EAGAIN || errno == EWOULDBLOCK; }
+
+  // One datagram. Failures other than a full buffer are counted here (the
+  // reply is lost); a full buffer is the caller's to count or queue.
   ssize_t SendDatagram(const PeerAddress& to, const std::string& bytes) {
     const ssize_t sent = sendto(socket_.fd(), bytes.data(), bytes.size(), MSG_DONTWAIT,
                                 reinterpret_cast<const sockaddr*>(&to.storage), to.length);
     if (sent < 0) {
       const int error = errno;
-      counters_.Add(UdpCounter::kSendFailed);
+      if (!FullBuffer()) counters_.Add(UdpCounter::kSendFailed);
       LOG_DEBUG("UDP reply to " << to.ToString() << " failed: " << std::strerror(error));
       errno = error;
     }
@@ -362,7 +366,7 @@ class UdpTransport : public Transport {
       sent = sendmmsg(socket_.fd(), send_headers_.data(), static_cast<unsigned>(count), 0);
     } while (sent < 0 && errno == EINTR);
     if (sent < 0) {
-      if (errno == EAGAIN || errno == EWOULDBLOCK) return false;
+      if (FullBuffer()) return false;
       // E.g. ENOBUFS: this frame is lost for this client, the next one may fare better.
       counters_.Add(UdpCounter::kSendFailed);
       LOG_DEBUG("UDP frame to " << peer.address().ToString() << " failed: " << std::strerror(errno));
