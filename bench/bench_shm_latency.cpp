@@ -64,9 +64,7 @@ void FrameWake(int samples, std::chrono::microseconds spin) {
     std::uniform_int_distribution<int> gap_us(500, 2000);
     session::Frame frame;
     frame.width = frame.height = 16;
-    frame.rgb.resize(16 * 16 * 3);
-    frame.depth.resize(16 * 16);
-    frame.mask.resize(16 * 16);
+    for (const auto& info : channels::kPixelChannels) frame.Hold(info.id);
     for (int i = 1; i <= samples; ++i) {
       std::this_thread::sleep_for(std::chrono::microseconds(gap_us(random)));
       frame.frame_id = static_cast<uint64_t>(i);

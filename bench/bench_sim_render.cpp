@@ -3,15 +3,18 @@
 //   2. physics real-time factor of one car and four UAVs (the paper's four
 //      trackers each flying its own UAV) at 240 Hz: the scene's World with
 //      three UAVs spawned, all following the car;
-//   3. frames rendered per second (RGB + depth + mask read back, boxes) from the UAV camera.
+//   3. frames rendered per second (RGB + depth + mask read back, boxes) from the UAV camera,
+//      then each further channel's added cost (protocol/channels.h), and RGB alone.
 //   sim4cv_bench_sim_render [--map FILE] [--width W] [--height H] [--steps N] [--frames N]
 //                           [--traffic-cars N] [--traffic-parked N] [--traffic-pedestrians N] [--traffic-lights on|off]
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <string>
 #include <vector>
 
 #include "bench/stats.h"
+#include "protocol/channels.h"
 #include "server/render/gl_context.h"
 #include "server/render/ground_truth.h"
 #include "server/render/renderer.h"
@@ -44,6 +47,57 @@ double CarAndFourUavsRealTimeFactor(const sim::Scene& scene, int steps) {
   for (int step = 0; step < steps; ++step) world.Step(state, kDt);
   return steps * kDt / Seconds(Clock::now() - start);
 }
+
+constexpr channels::ChannelSet kBaseChannels =
+    channels::Bit(proto::CHANNEL_RGB) | channels::Bit(proto::CHANNEL_DEPTH) | channels::Bit(proto::CHANNEL_MASK);
+
+// Times `frames` frames of the scene's first camera, the world stepping as at
+// 30 Hz between them, rendering the pixel channels of a set (boxes whenever
+// the set has MASK), read back as the daemon does.
+struct RenderTimer {
+  sim::World& world;
+  sim::State& state;
+  render::SceneGraphics& graphics;
+  render::Renderer& renderer;
+  uint32_t width, height;
+  int frames;
+
+  bench::Summary Run(channels::ChannelSet set) {
+    std::array<std::vector<uint8_t>, channels::kPixelChannelCount> planes;
+    render::FrameBuffers buffers{};
+    for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+      if (!channels::Has(set, channels::kPixelChannels[i].id)) continue;
+      planes[i].resize(std::size_t{width} * height * channels::kPixelChannels[i].bytes_per_pixel);
+      buffers[i] = planes[i].data();
+    }
+    const bool boxes = channels::Has(set, proto::CHANNEL_MASK);
+    const auto* mask = reinterpret_cast<const uint16_t*>(planes[*channels::IndexOf(proto::CHANNEL_MASK)].data());
+    std::vector<uint32_t> unoccluded(boxes ? graphics.instance_id_bound() : 0);
+    std::vector<render::GroundTruthBox> found;
+    render::BoxExtractor extractor;
+    std::vector<double> frame_ms;
+    frame_ms.reserve(static_cast<std::size_t>(frames));
+    const sim::CameraSpec& camera = scene_camera;
+    render::CameraView previous = graphics.CameraAt(camera, state);
+    for (int i = 0; i < frames; ++i) {
+      for (int s = 0; s < 8; ++s) world.Step(state, kDt);  // the scene moves as it does at 30 Hz
+      const auto start = Clock::now();
+      graphics.Update(state);
+      render::CameraView view = graphics.CameraAt(camera, state);
+      view.previous_world_from_camera = previous.world_from_camera;
+      renderer.Render(view, graphics.draw_items(), buffers, unoccluded);
+      if (boxes) {
+        auto& labelled = graphics.labelled_objects();
+        for (auto& object : labelled) object.unoccluded_pixels = unoccluded[object.instance];
+        extractor.Extract(mask, width, height, labelled, found);
+      }
+      frame_ms.push_back(Seconds(Clock::now() - start) * 1e3);
+      previous = view;
+    }
+    return bench::Summarize(frame_ms);
+  }
+  const sim::CameraSpec& scene_camera;
+};
 
 }  // namespace
 
@@ -82,33 +136,23 @@ int main(int argc, char** argv) {
   gl->MakeCurrent();
   render::SceneGraphics graphics(scene);
   render::Renderer renderer(graphics.meshes(), width, height);
-  render::BoxExtractor extractor;
-  std::vector<uint8_t> rgb(width * height * 3);
-  std::vector<float> depth(width * height);
-  std::vector<uint16_t> mask(width * height);
-  std::vector<uint32_t> unoccluded(graphics.instance_id_bound());
-  std::vector<render::GroundTruthBox> boxes;
-  std::vector<double> frame_ms;
-  frame_ms.reserve(static_cast<std::size_t>(frames));
   std::size_t triangles = 0;
   for (const auto& mesh : graphics.meshes()) triangles += mesh.indices.size() / 3;
-
-  for (int i = 0; i < frames; ++i) {
-    for (int s = 0; s < 8; ++s) world.Step(state, kDt);  // the scene moves as it does at 30 Hz
-    const auto start = Clock::now();
-    graphics.Update(state);
-    renderer.Render(graphics.CameraAt(scene.cameras[0], state), graphics.draw_items(),
-                    {rgb.data(), depth.data(), mask.data()}, unoccluded);
-    auto& labelled = graphics.labelled_objects();
-    for (auto& object : labelled) object.unoccluded_pixels = unoccluded[object.instance];
-    extractor.Extract(mask.data(), width, height, labelled, boxes);
-    frame_ms.push_back(Seconds(Clock::now() - start) * 1e3);
-  }
-  const auto render = bench::Summarize(frame_ms);
   std::printf("render: %ux%u, %zu triangles in the scene, renderer %s\n", width, height, triangles,
               gl->RendererName().c_str());
-  std::printf(
-      "render: %d frames (RGB+depth+mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: %.0f fps\n",
-      frames, render.median, render.p99, render.max, 1e3 / render.mean);
+  RenderTimer timer{world, state, graphics, renderer, width, height, frames, scene.cameras[0]};
+  const bench::Summary base = timer.Run(kBaseChannels);
+  std::printf("render: %d frames (rgb,depth,mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: "
+              "%.0f fps\n",
+              frames, base.median, base.p99, base.max, 1e3 / base.mean);
+  // Each further channel's cost: the same frames with it added (docs/benchmarks.md).
+  for (const channels::ChannelInfo& info : channels::kPixelChannels) {
+    if (channels::Has(kBaseChannels, info.id)) continue;
+    const bench::Summary with = timer.Run(kBaseChannels | channels::Bit(info.id));
+    std::printf("render: + %-8s median %.3f ms (%+.3f ms), p99 %.3f ms\n", std::string(info.name).c_str(), with.median,
+                with.median - base.median, with.p99);
+  }
+  const bench::Summary rgb_only = timer.Run(channels::Bit(proto::CHANNEL_RGB));
+  std::printf("render: rgb alone (no boxes) median %.3f ms\n", rgb_only.median);
   return 0;
 }

@@ -33,12 +33,15 @@ namespace sim4cv::shm {
 /* Bumped whenever any offset, size or protocol rule below changes.
  * 2: one read-only frame object plus one writable area per client, both
  *    memfds handed over a Unix socket (the reply ring and response area of
- *    version 1, which every client could write, are gone). */
-SIM4CV_SHM_CONSTANT(kShmLayoutVersion, 2)
+ *    version 1, which every client could write, are gone).
+ * 3: room for 8 channel records (the channel table of protocol/channels.h:
+ *    semantic, normals and flow joined RGB, depth and mask); each record
+ *    names its element type and components; boxes and entities moved down. */
+SIM4CV_SHM_CONSTANT(kShmLayoutVersion, 3)
 SIM4CV_SHM_CONSTANT(kShmHeaderBytes, 512)
 /* Frame slot: this many bytes of ShmFrameHeader region, then the pixels. */
 SIM4CV_SHM_CONSTANT(kShmFrameHeaderBytes, 8192)
-SIM4CV_SHM_CONSTANT(kShmMaxChannels, 4)
+SIM4CV_SHM_CONSTANT(kShmMaxChannels, 8)
 SIM4CV_SHM_CONSTANT(kShmMaxBoxes, 128)
 SIM4CV_SHM_CONSTANT(kShmMaxEntities, 8)
 /* A client's area: its header, its request ring (client -> daemon, one
@@ -54,12 +57,9 @@ SIM4CV_SHM_CONSTANT(kShmResponseDepth, 8)
 SIM4CV_SHM_CONSTANT(kShmAttachBytes, 256)
 /* Every slot, entry and pixel plane starts on a multiple of this. */
 SIM4CV_SHM_CONSTANT(kShmAlignment, 64)
-/* Pixel channels (proto Channel) and their bits in the channel masks. */
-SIM4CV_SHM_CONSTANT(kShmChannelRgb, 1)
-SIM4CV_SHM_CONSTANT(kShmChannelDepth, 2)
-SIM4CV_SHM_CONSTANT(kShmChannelMask, 3)
-/* (1 << RGB) | (1 << DEPTH) | (1 << MASK): a ring carrying every pixel channel. */
-SIM4CV_SHM_CONSTANT(kShmAllPixelChannels, 0x0e)
+/* Channel masks hold bit (1 << proto Channel) per pixel channel; which
+ * channels exist, their order in a slot and their sizes are the table of
+ * docs/protocol.md section 13.2 (protocol/channels.h in C++). */
 
 /* ShmAreaHeader.magic and ShmAttach.magic. */
 #define SIM4CV_SHM_AREA_MAGIC "SIM4CVCA"
@@ -108,10 +108,12 @@ typedef struct ShmHeader {
 
 /* One pixel channel of a frame slot. */
 typedef struct ShmChannel {
-  uint32_t channel;         /*  0: proto Channel: 1 RGB, 2 DEPTH, 3 MASK */
-  uint32_t format;          /*  4: proto PixelFormat: 1 RGB8, 2 DEPTH_F32, 3 INSTANCE_U16 */
+  uint32_t channel;         /*  0: proto Channel (1 RGB, 2 DEPTH, 3 MASK, 5 SEMANTIC, 6 NORMALS, 7 FLOW) */
+  uint32_t format;          /*  4: proto PixelFormat */
   uint32_t stride;          /*  8: bytes per row */
-  uint32_t bytes_per_pixel; /* 12: 3, 4, 2 */
+  uint16_t bytes_per_pixel; /* 12: components * element bytes */
+  uint8_t element;          /* 14: proto ElementType: 1 uint8, 2 uint16, 3 float32 */
+  uint8_t components;       /* 15: per pixel */
   uint64_t offset;          /* 16: from the start of the slot; a multiple of 64 */
   uint64_t bytes;           /* 24: height * stride */
 } ShmChannel;
@@ -148,16 +150,16 @@ typedef struct ShmFrameHeader {
   uint32_t width;              /*   40 */
   uint32_t height;             /*   44 */
   uint32_t channel_mask;       /*   48: bit (1 << channel) per channel present (= ShmHeader.channel_mask) */
-  uint32_t channel_count;      /*   52: records in channels[] (3: RGB, DEPTH, MASK; an absent one is all zero) */
+  uint32_t channel_count;      /*   52: records in channels[]: one per pixel channel of the table, in its order; an absent one is all zero */
   uint32_t box_count;          /*   56: entries used in boxes[] */
   uint32_t box_total;          /*   60: visible labelled objects (> box_count if truncated) */
   uint32_t entity_count;       /*   64: entries used in entities[] */
   uint32_t camera_index;       /*   68: index of the camera in Welcome.cameras */
   uint8_t reserved0[56];       /*   72 */
-  ShmChannel channels[4];      /*  128: RGB, DEPTH, MASK (in this order; zero if absent), one unused */
-  ShmBox boxes[128];           /*  256: ordered by object_id */
-  ShmEntityPose entities[8];   /* 4352: ordered by id */
-  uint8_t reserved1[2944];     /* 5248 */
+  ShmChannel channels[8];      /*  128: the table's pixel channels in its order (zero if absent), then unused */
+  ShmBox boxes[128];           /*  384: ordered by object_id */
+  ShmEntityPose entities[8];   /* 4480: ordered by id */
+  uint8_t reserved1[2816];     /* 5376 */
 } ShmFrameHeader;
 
 /* The start of a client's area (256 bytes): one per attached client, mapped
@@ -226,6 +228,7 @@ SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, frame_futex) == 208, "ShmHeader.fra
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, closed) == 216, "ShmHeader.closed");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmHeader, reserved4) == 256, "ShmHeader line 4");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmChannel) == 32, "ShmChannel is 32 bytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmChannel, element) == 14, "ShmChannel.element");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmChannel, offset) == 16, "ShmChannel.offset");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmBox) == 32, "ShmBox is 32 bytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmBox, visibility) == 24, "ShmBox.visibility");
@@ -239,9 +242,9 @@ SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, sim_time) == 24, "ShmFrameHead
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, width) == 40, "ShmFrameHeader.width");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, camera_index) == 68, "ShmFrameHeader.camera_index");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, channels) == 128, "ShmFrameHeader.channels");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, boxes) == 256, "ShmFrameHeader.boxes");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, entities) == 4352, "ShmFrameHeader.entities");
-SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, reserved1) == 5248, "ShmFrameHeader.reserved1");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, boxes) == 384, "ShmFrameHeader.boxes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, entities) == 4480, "ShmFrameHeader.entities");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmFrameHeader, reserved1) == 5376, "ShmFrameHeader.reserved1");
 
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmAreaHeader) == 256, "ShmAreaHeader is kShmAreaHeaderBytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAreaHeader, request_write) == 64, "ShmAreaHeader line 1");
@@ -256,7 +259,7 @@ SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmAttach) == 256, "ShmAttach is kShmAttachBytes
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAttach, message) == 32, "ShmAttach.message");
 
 #ifdef __cplusplus
-static_assert(kShmMaxChannels == 4 && kShmMaxBoxes == 128 && kShmMaxEntities == 8, "array sizes above");
+static_assert(kShmMaxChannels == 8 && kShmMaxBoxes == 128 && kShmMaxEntities == 8, "array sizes above");
 }  // namespace sim4cv::shm
 #endif
 

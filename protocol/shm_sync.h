@@ -11,12 +11,14 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <ctime>
 #include <string>
 
+#include "protocol/channels.h"
 #include "protocol/shm_layout.h"
 
 namespace sim4cv::shm {
@@ -61,33 +63,13 @@ constexpr uint64_t AlignUp(uint64_t value, uint64_t alignment) {
   return (value + alignment - 1) / alignment * alignment;
 }
 
-// Bit of a pixel channel (kShmChannelRgb ...) in a channel mask.
-constexpr uint32_t ChannelBit(uint32_t channel) { return 1u << channel; }
-
-// The daemon flag's name of a pixel channel (--shm-channels rgb,depth,mask); "" for others.
-constexpr const char* ChannelFlagName(uint32_t channel) {
-  return channel == kShmChannelRgb     ? "rgb"
-         : channel == kShmChannelDepth ? "depth"
-         : channel == kShmChannelMask  ? "mask"
-                                       : "";
-}
-
-// A channel mask as --shm-channels writes it, e.g. "rgb,mask".
-inline std::string ChannelFlagValue(uint32_t channel_mask) {
-  std::string value;
-  for (uint32_t channel = kShmChannelRgb; channel <= kShmChannelMask; ++channel) {
-    if ((channel_mask & ChannelBit(channel)) != 0)
-      value.append(value.empty() ? "" : ",").append(ChannelFlagName(channel));
-  }
-  return value;
-}
-
 // Where everything lives in the frame object with the given parameters. A
-// slot holds only the planes of `channel_mask`, packed in the order RGB,
-// DEPTH, MASK: smaller slots are less to copy past and more of them stay in
-// cache.
+// slot holds only the planes of `channel_mask` (bit 1 << proto Channel),
+// packed in the order of the channel table (protocol/channels.h): smaller
+// slots are less to copy past and more of them stay in cache.
 struct Geometry {
-  uint64_t rgb_offset = 0, depth_offset = 0, mask_offset = 0;  // within a slot; 0: channel absent
+  // Per entry of channels::kPixelChannels: the plane's offset within a slot; 0: not carried.
+  std::array<uint64_t, channels::kPixelChannelCount> offsets{};
   uint64_t slot_bytes = 0;
   uint32_t slot_count = 0;
   uint64_t slots_offset = 0;
@@ -95,19 +77,16 @@ struct Geometry {
 };
 
 inline Geometry ComputeGeometry(uint32_t width, uint32_t height, uint32_t slot_count,
-                                uint32_t channel_mask = kShmAllPixelChannels) {
+                                channels::ChannelSet channel_mask = channels::kAllPixels) {
   const uint64_t pixels = static_cast<uint64_t>(width) * height;
   uint64_t end = kShmFrameHeaderBytes;
-  auto place = [&](uint32_t channel, uint64_t bytes_per_pixel) -> uint64_t {
-    if ((channel_mask & ChannelBit(channel)) == 0) return 0;
-    const uint64_t offset = AlignUp(end, kShmAlignment);
-    end = offset + pixels * bytes_per_pixel;
-    return offset;
-  };
   Geometry g;
-  g.rgb_offset = place(kShmChannelRgb, 3);
-  g.depth_offset = place(kShmChannelDepth, 4);
-  g.mask_offset = place(kShmChannelMask, 2);
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    const channels::ChannelInfo& info = channels::kPixelChannels[i];
+    if (!channels::Has(channel_mask, info.id)) continue;
+    g.offsets[i] = AlignUp(end, kShmAlignment);
+    end = g.offsets[i] + pixels * info.bytes_per_pixel;
+  }
   g.slot_bytes = AlignUp(end, 4096);
   g.slot_count = slot_count;
   g.slots_offset = 4096;

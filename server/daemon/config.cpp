@@ -36,23 +36,32 @@ std::vector<uint32_t> ParseIdList(const std::string& flag, const std::string& te
   return ids;
 }
 
-// "rgb,depth": the pixel channels the shared-memory ring carries, as a channel mask.
-uint32_t ParseChannelList(const std::string& flag, const std::string& text) {
-  uint32_t mask = 0;
+// "rgb,depth": the pixel channels the shared-memory ring carries, as a channel set.
+channels::ChannelSet ParseChannelList(const std::string& flag, const std::string& text) {
+  channels::ChannelSet set = 0;
   for (std::size_t start = 0;;) {
     const std::size_t comma = text.find(',', start);
     const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    uint32_t channel = shm::kShmChannelRgb;
-    while (channel <= shm::kShmChannelMask && item != shm::ChannelFlagName(channel)) ++channel;
-    SIM4CV_THROW_UNLESS(channel <= shm::kShmChannelMask,
-                        flag << " is '" << text << "'; '" << item
-                             << "' is not a channel: use rgb, depth and/or mask separated by commas, e.g. rgb");
-    SIM4CV_THROW_UNLESS((mask & shm::ChannelBit(channel)) == 0,
-                        flag << " is '" << text << "'; it lists " << item << " twice");
-    mask |= shm::ChannelBit(channel);
-    if (comma == std::string::npos) return mask;
+    const channels::ChannelInfo* info = channels::FindByName(item);
+    SIM4CV_THROW_UNLESS(info != nullptr, flag << " is '" << text << "'; '" << item << "' is not a channel: use "
+                                              << channels::Names(channels::kAllPixels)
+                                              << " (any of them, separated by commas), e.g. rgb");
+    SIM4CV_THROW_UNLESS(!channels::Has(set, info->id), flag << " is '" << text << "'; it lists " << item << " twice");
+    set |= channels::Bit(info->id);
+    if (comma == std::string::npos) return set;
     start = comma + 1;
   }
+}
+
+// The --help lines that list the pixel channels, from the channel table.
+std::string ChannelHelp() {
+  std::string text;
+  for (const channels::ChannelInfo& info : channels::kPixelChannels) {
+    std::string name(info.name);
+    name.resize(10, ' ');
+    text += "                              " + name + std::string(info.summary) + "\n";
+  }
+  return text;
 }
 
 }  // namespace
@@ -111,9 +120,9 @@ Usage: sim4cvd [flags]
   --shm-camera NAME         the camera the shared-memory ring carries (default uav)
   --shm-slots N             frame slots in the shared-memory ring (default 8)
   --shm-expiry-ms N         a shared-memory client silent this long is disconnected (default 5000)
-  --shm-channels LIST       the pixel channels the shared-memory ring carries: rgb, depth and/or mask,
-                            separated by commas (default rgb,depth,mask); fewer channels, less copying
-  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
+  --shm-channels LIST       the pixel channels the shared-memory ring carries, separated by commas
+                            (default rgb,depth,mask); fewer channels, less copying. The channels:
+)" + ChannelHelp() + R"(  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --log FILE                record every frame (poses, tracker and ground-truth boxes, car controls)
                             to the run log FILE (docs/logs.md; extension .s4log by convention)
   --log-label TEXT          what the run is, e.g. the tracker's name, for the log's header (default:

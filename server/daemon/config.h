@@ -6,12 +6,15 @@
 #include <string>
 #include <vector>
 
+#include "protocol/channels.h"
 #include "protocol/shm_layout.h"
+#include "server/transport/shm/shm_region.h"
 #include "server/common/limits.h"
 #include "server/sim/traffic/traffic_config.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::daemon {
+
 
 // The source tree's scenes/ folder, where the shipped maps are.
 std::string DefaultMapsDir();
@@ -50,7 +53,8 @@ struct Config {
   uint32_t shm_slots = 8;
   uint32_t shm_expiry_ms = 5000;  // a silent shared-memory client is disconnected after this
   // --shm-channels: bit (1 << proto::Channel) per pixel channel the ring carries.
-  uint32_t shm_channel_mask = shm::kShmAllPixelChannels;
+  // The channels the shm ring carries (--shm-channels).
+  channels::ChannelSet shm_channel_mask = transport::kShmDefaultChannels;
   std::string log_level = "info";
   // Run logs (docs/logs.md): record every frame to log_file; replay_file makes
   // the car and the UAV follow a recorded log's poses instead of physics.

@@ -233,7 +233,8 @@ void SimThread::ApplyCommands() {
 void SimThread::Subscribe(session::ClientId client, session::SubscribeCommand& subscribe) {
   const auto& cameras = sim_.cameras();
   if (subscribe.camera_index < cameras.size() && !cameras[subscribe.camera_index].name.empty()) {
-    scheduler_.Subscribe(client, subscribe.camera_index, subscribe.delivery, std::move(subscribe.link), subscribe.gate);
+    scheduler_.Subscribe(client, subscribe.camera_index, subscribe.delivery, subscribe.channels,
+                         std::move(subscribe.link), subscribe.gate);
     return;
   }
   // The camera went (RemoveCamera, Remove, Reset, LoadMap) between the
@@ -304,6 +305,7 @@ void SimThread::AfterChange(const Simulation::Change& change, const proto::World
     for (const auto& link : links) OfferError(link.get(), proto::ERROR_CODE_UNKNOWN_CAMERA, message);
   };
   if (change.new_scene) {
+    previous_views_.Clear();  // no flow across worlds
     const auto scene_cameras = static_cast<uint32_t>(sim_.scene().cameras.size());
     tell(scheduler_.DropCamerasFrom(scene_cameras),
          "the camera you subscribed to was removed: the world was reset or a map loaded; subscribe again");
@@ -331,8 +333,14 @@ void SimThread::AdvanceFrame() {
   ++state.frame_id;
   PublishState();
   graphics_->Update(state);
-  for (uint32_t camera = 0; camera < sim_.cameras().size(); ++camera) {
-    if (scheduler_.CameraWanted(camera)) RenderCamera(camera);
+  const auto& cameras = sim_.cameras();
+  for (uint32_t camera = 0; camera < cameras.size(); ++camera) {
+    const channels::ChannelSet wanted = scheduler_.ChannelsWanted(camera);
+    if (wanted != 0) RenderCamera(camera, wanted);
+  }
+  // Every camera's pose, rendered or not: the next frame's flow starts here.
+  for (uint32_t camera = 0; camera < cameras.size(); ++camera) {
+    previous_views_.Remember(camera, cameras[camera], graphics_->CameraAt(cameras[camera], state));
   }
   if (logger_) {
     logger_->Append(state, scheduler_);
@@ -340,35 +348,45 @@ void SimThread::AdvanceFrame() {
   }
 }
 
-void SimThread::RenderCamera(uint32_t camera_index) {
+void SimThread::RenderCamera(uint32_t camera_index, channels::ChannelSet wanted) {
   session::Frame* frame = nullptr;
   session::FrameRef ref = frame_pool_.Acquire(&frame);
   const sim::State& state = sim_.state();
   const sim::CameraSpec& spec = sim_.cameras()[camera_index];
-  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
-  // Pooled frames keep their buffers, so these resizes allocate only at start.
-  frame->rgb.resize(pixels * 3);
-  frame->depth.resize(pixels);
-  frame->mask.resize(pixels);
+  // The boxes are extracted from the instance mask.
+  const bool boxes = channels::Has(wanted, proto::CHANNEL_BOXES);
+  if (boxes) wanted |= channels::Bit(proto::CHANNEL_MASK);
   frame->frame_id = state.frame_id;
   frame->sim_time = state.sim_time;
   frame->camera_index = camera_index;
   frame->camera_name = spec.name;
   frame->width = spec.width;
   frame->height = spec.height;
+  frame->channels = 0;
+  render::FrameBuffers buffers{};
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    const proto::Channel channel = channels::kPixelChannels[i].id;
+    if (channels::Has(wanted, channel)) buffers[i] = frame->Hold(channel).data();
+  }
 
   auto& labelled = graphics_->labelled_objects();
   for (const auto& object : labelled) unoccluded_pixels_[object.instance] = 0;
-  const render::CameraView view = graphics_->CameraAt(spec, state);
-  renderer_->Render(view, graphics_->draw_items(), {frame->rgb.data(), frame->depth.data(), frame->mask.data()},
-                    unoccluded_pixels_);
-  for (auto& object : labelled) object.unoccluded_pixels = unoccluded_pixels_[object.instance];
-  boxes_.Extract(frame->mask.data(), spec.width, spec.height, labelled, frame->boxes);
-  // 3D ground truth from the very view that was rendered, so it matches the pixels.
+  render::CameraView view = graphics_->CameraAt(spec, state);
+  view.previous_world_from_camera = previous_views_.Of(camera_index, spec, view);
+  renderer_->Render(view, graphics_->draw_items(), buffers,
+                    boxes ? std::span<uint32_t>(unoccluded_pixels_) : std::span<uint32_t>());
+  frame->boxes.clear();
+  frame->objects.clear();
   const render::BoxProjector camera(view);
   frame->intrinsics = camera.intrinsics();
   frame->camera_pose = render::OpenCvPoseOf(view);
-  graphics_->catalog().Fill(graphics_->moving_objects(), camera, frame->boxes, frame->objects);
+  if (boxes) {
+    for (auto& object : labelled) object.unoccluded_pixels = unoccluded_pixels_[object.instance];
+    const auto* mask = reinterpret_cast<const uint16_t*>(frame->Pixels(proto::CHANNEL_MASK));
+    boxes_.Extract(mask, spec.width, spec.height, labelled, frame->boxes);
+    // 3D ground truth from the very view that was rendered, so it matches the pixels.
+    graphics_->catalog().Fill(graphics_->moving_objects(), camera, frame->boxes, frame->objects);
+  }
   FillStateMessage(state, frame->state);
   frame->render_end_mono_ns = MonotonicNanoseconds();
   scheduler_.Deliver(ref);

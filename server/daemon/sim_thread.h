@@ -15,6 +15,7 @@
 #include "server/daemon/run_logger.h"
 #include "server/daemon/simulation.h"
 #include "server/render/ground_truth.h"
+#include "server/render/previous_views.h"
 #include "server/session/command_queue.h"
 #include "server/session/scheduler.h"
 #include "server/session/server_context.h"
@@ -69,7 +70,9 @@ class SimThread {
   // Forgets the tracker report of a client that left (finding 6).
   void ForgetClient(session::ClientId client);
   void AdvanceFrame();
-  void RenderCamera(uint32_t camera_index);
+  // Renders the channels `wanted` (ChannelsWanted) of one camera and hands
+  // the frame to the scheduler.
+  void RenderCamera(uint32_t camera_index, channels::ChannelSet wanted);
   void PublishState();
   void PublishWorld();
 
@@ -88,6 +91,7 @@ class SimThread {
   std::unique_ptr<render::SceneGraphics> graphics_;
   std::unique_ptr<render::Renderer> renderer_;
   render::BoxExtractor boxes_;
+  render::PreviousViews previous_views_;
   std::vector<uint32_t> unoccluded_pixels_;
   uint32_t renderer_width_ = 0, renderer_height_ = 0;
   std::string renderer_name_;

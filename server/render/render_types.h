@@ -2,8 +2,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <vector>
+
+#include "protocol/channels.h"
 
 namespace sim4cv::render {
 
@@ -11,6 +14,7 @@ struct Vertex {
   float position[3];
   float normal[3];
   float color[3];  // linear RGB in [0, 1]
+  uint32_t semantic;  // SemanticClass (semantic_classes.h) of the surface, for CHANNEL_SEMANTIC
 };
 
 // Indexed triangle list; front faces wind counter-clockwise seen from outside.
@@ -31,12 +35,17 @@ struct DrawItem {
   MeshId mesh = 0;
   Eigen::Matrix4f world_from_model = Eigen::Matrix4f::Identity();
   InstanceId instance = kUnlabelled;
+  // The same item's transform one frame earlier (for optical flow); equal to
+  // world_from_model for what does not move or did not exist.
+  Eigen::Matrix4f previous_world_from_model = Eigen::Matrix4f::Identity();
 };
 
 // A pinhole camera. The camera frame follows OpenGL: x right, y up, looking
 // along -z. world_from_camera is that frame's pose in the (z-up) world.
 struct CameraView {
   Eigen::Matrix4f world_from_camera = Eigen::Matrix4f::Identity();
+  // The camera's pose one frame earlier (for optical flow; same intrinsics).
+  Eigen::Matrix4f previous_world_from_camera = Eigen::Matrix4f::Identity();
   float fov_y_deg = 60.0f;
   float near_m = 0.1f;
   float far_m = 1000.0f;
@@ -44,12 +53,10 @@ struct CameraView {
   uint32_t height = 180;
 };
 
-// Where one render writes its channels: width*height pixels each, tightly
-// packed, top row first. A null pointer skips that channel's read-back.
-struct FrameBuffers {
-  uint8_t* rgb = nullptr;    // 3 bytes per pixel
-  float* depth = nullptr;    // metres along the optical axis; +inf where nothing was hit
-  uint16_t* mask = nullptr;  // InstanceId per pixel
-};
+// Where one render writes its channels, one pointer per entry of
+// channels::kPixelChannels: width*height pixels each in the channel's wire
+// layout, tightly packed, top row first. A null pointer: that channel is
+// neither drawn nor read back.
+using FrameBuffers = std::array<uint8_t*, channels::kPixelChannelCount>;
 
 }  // namespace sim4cv::render

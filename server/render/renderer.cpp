@@ -1,6 +1,7 @@
-// One geometry pass writes colour, linear depth and instance id through
-// multiple render targets; a second, stencil-only pass counts each labelled
-// instance's unoccluded silhouette with occlusion queries.
+// One geometry pass writes every requested pixel channel through multiple
+// render targets (one ChannelProgram per set of channels); a second,
+// stencil-only pass counts each labelled instance's unoccluded silhouette
+// with occlusion queries.
 #include "server/render/renderer.h"
 
 #include <algorithm>
@@ -11,54 +12,12 @@
 
 #include "server/common/check.h"
 #include "server/render/camera_math.h"
+#include "server/render/channel_program.h"
 #include "server/render/gl_program.h"
 
 namespace sim4cv::render {
 namespace {
 
-constexpr const char* kVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 a_position;
-layout(location = 1) in vec3 a_normal;
-layout(location = 2) in vec3 a_color;
-uniform mat4 u_model;
-uniform mat4 u_view;
-uniform mat4 u_projection;
-uniform mat3 u_normal_matrix;
-out vec3 v_normal;
-out vec3 v_color;
-out float v_depth;
-void main() {
-  vec4 camera_position = u_view * (u_model * vec4(a_position, 1.0));
-  v_depth = -camera_position.z;  // camera-space z is affine over a triangle, so interpolation is exact
-  v_normal = u_normal_matrix * a_normal;
-  v_color = a_color;
-  gl_Position = u_projection * camera_position;
-}
-)";
-
-constexpr const char* kFragmentShader = R"(#version 330 core
-in vec3 v_normal;
-in vec3 v_color;
-in float v_depth;
-uniform uint u_instance;
-uniform vec3 u_to_light;
-layout(location = 0) out vec4 out_color;
-layout(location = 1) out float out_depth;
-layout(location = 2) out uint out_instance;
-const float kAmbient = 0.35;
-void main() {
-  float lambert = max(dot(normalize(v_normal), u_to_light), 0.0);
-  vec3 linear_rgb = v_color * (kAmbient + (1.0 - kAmbient) * lambert);
-  out_color = vec4(pow(linear_rgb, vec3(1.0 / 2.2)), 1.0);  // 8-bit output is gamma encoded
-  out_depth = v_depth;
-  out_instance = u_instance;
-}
-)";
-
-enum Attachment : GLuint { kColorAttachment = 0, kDepthAttachment = 1, kInstanceAttachment = 2, kAttachmentCount = 3 };
-
-// Sky colour, already gamma encoded since clears bypass the shader.
-constexpr GLfloat kBackground[4] = {0.62f, 0.76f, 0.90f, 1.0f};
 // Stencil references 1..255 tag successive instances, so the stencil buffer
 // is cleared only once per 255 instances instead of once per instance.
 constexpr GLint kMaxStencilReference = 255;
@@ -109,11 +68,13 @@ struct Renderer::Impl {
   uint32_t max_height = 0;
   std::vector<MeshRange> meshes;
 
-  GLuint program = 0;
-  GLint u_model = -1, u_view = -1, u_projection = -1, u_normal_matrix = -1, u_instance = -1, u_to_light = -1;
+  // Built the first time a set of channels is drawn (bit i: plane i).
+  std::array<std::unique_ptr<ChannelProgram>, (1u << channels::kPixelChannelCount)> programs;
+  const ChannelProgram* program = nullptr;  // of the frame being drawn
   GLuint vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
   GLuint framebuffer = 0;
-  GLuint color_targets[kAttachmentCount] = {};
+  // Colour attachment i holds plane i; made the first time it is drawn.
+  std::array<GLuint, channels::kPixelChannelCount> color_targets{};
   GLuint depth_stencil_target = 0;
   std::vector<GLuint> queries;  // grows to the most instances seen in a frame
 
@@ -128,17 +89,18 @@ struct Renderer::Impl {
   // frees what it made (deleting name 0 is a no-op).
   ~Impl() {
     glDeleteQueries(static_cast<GLsizei>(queries.size()), queries.data());
-    glDeleteRenderbuffers(kAttachmentCount, color_targets);
+    glDeleteRenderbuffers(static_cast<GLsizei>(color_targets.size()), color_targets.data());
     glDeleteRenderbuffers(1, &depth_stencil_target);
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteBuffers(1, &index_buffer);
     glDeleteBuffers(1, &vertex_buffer);
     glDeleteVertexArrays(1, &vertex_array);
-    glDeleteProgram(program);
   }
 
   void UploadMeshes(const std::vector<Mesh>& all_meshes);
   void CreateFramebuffer();
+  // Makes the program and render targets for `planes` current.
+  void UsePlanes(PlaneSet planes);
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
   void Draw(const DrawItem& item) const;
   void DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
@@ -180,30 +142,42 @@ void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
   attribute(0, offsetof(Vertex, position));
   attribute(1, offsetof(Vertex, normal));
   attribute(2, offsetof(Vertex, color));
+  glEnableVertexAttribArray(3);
+  glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, sizeof(Vertex), reinterpret_cast<const void*>(offsetof(Vertex, semantic)));
 }
 
 void Renderer::Impl::CreateFramebuffer() {
-  const GLenum formats[kAttachmentCount] = {GL_RGBA8, GL_R32F, GL_R16UI};
-  const auto width = static_cast<GLsizei>(max_width);
-  const auto height = static_cast<GLsizei>(max_height);
   glGenFramebuffers(1, &framebuffer);
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-  glGenRenderbuffers(kAttachmentCount, color_targets);
-  GLenum draw_buffers[kAttachmentCount];
-  for (GLuint i = 0; i < kAttachmentCount; ++i) {
-    glBindRenderbuffer(GL_RENDERBUFFER, color_targets[i]);
-    glRenderbufferStorage(GL_RENDERBUFFER, formats[i], width, height);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_RENDERBUFFER, color_targets[i]);
-    draw_buffers[i] = GL_COLOR_ATTACHMENT0 + i;
-  }
   glGenRenderbuffers(1, &depth_stencil_target);
   glBindRenderbuffer(GL_RENDERBUFFER, depth_stencil_target);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, width, height);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, static_cast<GLsizei>(max_width),
+                        static_cast<GLsizei>(max_height));
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_target);
-  glDrawBuffers(kAttachmentCount, draw_buffers);  // framebuffer state: set once
+}
+
+void Renderer::Impl::UsePlanes(PlaneSet planes) {
+  std::array<GLenum, channels::kPixelChannelCount> draw_buffers{};
+  for (GLuint i = 0; i < channels::kPixelChannelCount; ++i) {
+    draw_buffers[i] = GL_NONE;
+    if ((planes & (1u << i)) == 0) continue;
+    if (color_targets[i] == 0) {
+      glGenRenderbuffers(1, &color_targets[i]);
+      glBindRenderbuffer(GL_RENDERBUFFER, color_targets[i]);
+      glRenderbufferStorage(GL_RENDERBUFFER, kChannelOutputs[i]->target_format, static_cast<GLsizei>(max_width),
+                            static_cast<GLsizei>(max_height));
+      glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_RENDERBUFFER, color_targets[i]);
+    }
+    draw_buffers[i] = GL_COLOR_ATTACHMENT0 + i;
+  }
+  glDrawBuffers(static_cast<GLsizei>(draw_buffers.size()), draw_buffers.data());
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
     throw std::runtime_error("renderer framebuffer is incomplete");
   }
+  auto& cached = programs[planes];
+  if (!cached) cached = std::make_unique<ChannelProgram>(planes);  // once per set of channels
+  program = cached.get();
+  glUseProgram(program->id());
 }
 
 bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const {
@@ -220,17 +194,16 @@ bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vec
 void Renderer::Impl::Draw(const DrawItem& item) const {
   const MeshRange& mesh = meshes[item.mesh];
   const Eigen::Matrix3f normal_matrix = item.world_from_model.topLeftCorner<3, 3>().inverse().transpose();
-  glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
-  glUniformMatrix3fv(u_normal_matrix, 1, GL_FALSE, normal_matrix.data());
-  glUniform1ui(u_instance, item.instance);
+  glUniformMatrix4fv(program->u_model, 1, GL_FALSE, item.world_from_model.data());
+  glUniformMatrix4fv(program->u_previous_model, 1, GL_FALSE, item.previous_world_from_model.data());
+  glUniformMatrix3fv(program->u_normal_matrix, 1, GL_FALSE, normal_matrix.data());
+  glUniform1ui(program->u_instance, item.instance);
   glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT,
                  reinterpret_cast<const void*>(mesh.first_index * sizeof(uint32_t)));
 }
 
 void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
                                std::span<uint32_t> unoccluded_pixels) {
-  const GLfloat infinite_depth[4] = {std::numeric_limits<float>::infinity(), 0.0f, 0.0f, 0.0f};
-  const GLuint no_instance[4] = {kUnlabelled, 0, 0, 0};
   // Write masks first: clears obey them, and the previous frame's counting pass turned them off.
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
@@ -238,9 +211,15 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   glStencilMask(0xFF);
   glDisable(GL_STENCIL_TEST);
-  glClearBufferfv(GL_COLOR, kColorAttachment, kBackground);
-  glClearBufferfv(GL_COLOR, kDepthAttachment, infinite_depth);
-  glClearBufferuiv(GL_COLOR, kInstanceAttachment, no_instance);
+  for (GLint i = 0; i < static_cast<GLint>(channels::kPixelChannelCount); ++i) {
+    if ((program->planes() & (1u << i)) == 0) continue;
+    const ChannelOutput& output = *kChannelOutputs[i];
+    if (output.integer) {
+      glClearBufferuiv(GL_COLOR, i, output.clear_integer.data());
+    } else {
+      glClearBufferfv(GL_COLOR, i, output.clear_float.data());
+    }
+  }
   glClearBufferfi(GL_DEPTH_STENCIL, 0, 1.0f, 0);
 
   labelled_drawn.clear();
@@ -248,7 +227,7 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
     const DrawItem& item = items[i];
     SIM4CV_THROW_UNLESS(item.mesh < meshes.size(), "draw item " << i << " names mesh " << item.mesh << " of "
                                                                 << meshes.size());
-    SIM4CV_THROW_UNLESS(item.instance < unoccluded_pixels.size(),
+    SIM4CV_THROW_UNLESS(unoccluded_pixels.empty() || item.instance < unoccluded_pixels.size(),
                         "instance " << item.instance << " does not fit unoccluded_pixels of size "
                                     << unoccluded_pixels.size());
     if (meshes[item.mesh].index_count == 0 || !InFrustum(item, planes)) continue;
@@ -258,17 +237,13 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
 }
 
 void Renderer::Impl::ReadBack(const CameraView& camera, const FrameBuffers& out) const {
-  const auto width = static_cast<GLsizei>(camera.width);
-  const auto height = static_cast<GLsizei>(camera.height);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  const auto read = [&](Attachment attachment, GLenum format, GLenum type, void* destination) {
-    if (destination == nullptr) return;
-    glReadBuffer(GL_COLOR_ATTACHMENT0 + attachment);
-    glReadPixels(0, 0, width, height, format, type, destination);
-  };
-  read(kColorAttachment, GL_RGB, GL_UNSIGNED_BYTE, out.rgb);
-  read(kDepthAttachment, GL_RED, GL_FLOAT, out.depth);
-  read(kInstanceAttachment, GL_RED_INTEGER, GL_UNSIGNED_SHORT, out.mask);
+  for (GLuint i = 0; i < channels::kPixelChannelCount; ++i) {
+    if (out[i] == nullptr) continue;
+    glReadBuffer(GL_COLOR_ATTACHMENT0 + i);
+    glReadPixels(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height),
+                 kChannelOutputs[i]->read_format, kChannelOutputs[i]->read_type, out[i]);
+  }
 }
 
 // Each instance is drawn alone with the depth test off; the stencil lets a
@@ -318,13 +293,9 @@ Renderer::Renderer(const std::vector<Mesh>& meshes, uint32_t max_width, uint32_t
   Impl& gl = *impl_;
   gl.max_width = max_width;
   gl.max_height = max_height;
-  gl.program = LinkProgram(kVertexShader, kFragmentShader);
-  gl.u_model = RequireUniform(gl.program, "u_model");
-  gl.u_view = RequireUniform(gl.program, "u_view");
-  gl.u_projection = RequireUniform(gl.program, "u_projection");
-  gl.u_normal_matrix = RequireUniform(gl.program, "u_normal_matrix");
-  gl.u_instance = RequireUniform(gl.program, "u_instance");
-  gl.u_to_light = RequireUniform(gl.program, "u_to_light");
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    SIM4CV_DEMAND(kChannelOutputs[i]->channel == channels::kPixelChannels[i].id);
+  }
   gl.UploadMeshes(meshes);
   gl.CreateFramebuffer();
   ThrowOnGlError("Renderer setup");
@@ -346,22 +317,32 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   // GL's window origin is the bottom-left; mirroring y in clip space puts the
   // image's top row first in glReadPixels. The mirror also reverses winding.
   const Eigen::Matrix4f top_row_first = Eigen::Vector4f(1.0f, -1.0f, 1.0f, 1.0f).asDiagonal() * projection;
+  const Eigen::Matrix4f previous_view_projection = top_row_first * RigidInverse(camera.previous_world_from_camera);
   const Eigen::Vector3f to_light = Eigen::Vector3f(-0.4f, 0.3f, 0.85f).normalized();
+  const Eigen::Vector2f viewport(static_cast<float>(camera.width), static_cast<float>(camera.height));
+  PlaneSet planes = 0;
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    if (out[i] != nullptr) planes |= 1u << i;
+  }
+  if (planes == 0) return;  // nothing asked for: nothing drawn
 
   glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer);
   glViewport(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height));
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CW);
-  glUseProgram(gl.program);
+  gl.UsePlanes(planes);
+  const ChannelProgram& program = *gl.program;
   glBindVertexArray(gl.vertex_array);
-  glUniformMatrix4fv(gl.u_view, 1, GL_FALSE, view.data());
-  glUniformMatrix4fv(gl.u_projection, 1, GL_FALSE, top_row_first.data());
-  glUniform3fv(gl.u_to_light, 1, to_light.data());
+  glUniformMatrix4fv(program.u_view, 1, GL_FALSE, view.data());
+  glUniformMatrix4fv(program.u_projection, 1, GL_FALSE, top_row_first.data());
+  glUniformMatrix4fv(program.u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
+  glUniform3fv(program.u_to_light, 1, to_light.data());
+  glUniform2fv(program.u_viewport, 1, viewport.data());
 
   gl.DrawScene(items, FrustumPlanes(projection * view), unoccluded_pixels);
   gl.ReadBack(camera, out);
-  gl.CountUnoccludedPixels(items, unoccluded_pixels);
+  if (!unoccluded_pixels.empty()) gl.CountUnoccludedPixels(items, unoccluded_pixels);
   ThrowOnGlError("Renderer::Render");
 }
 

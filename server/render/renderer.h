@@ -1,6 +1,7 @@
-// Draws a list of mesh instances from one camera into RGB, linear depth and an
-// instance mask in a single pass (multiple render targets), and measures how
-// many pixels each labelled instance would cover if nothing occluded it.
+// Draws a list of mesh instances from one camera into the pixel channels
+// asked for (protocol/channels.h; one pass, multiple render targets), and
+// measures how many pixels each labelled instance would cover if nothing
+// occluded it.
 // Needs a current GL context (see gl_context.h); owns only GL objects.
 #pragma once
 
@@ -22,10 +23,12 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  // Renders `items` seen by `camera` into `out`. For every labelled item,
-  // unoccluded_pixels[item.instance] receives the pixel count of its
-  // silhouette rendered alone (entries of ids not drawn are left untouched);
-  // the span must have room for the largest instance id. No heap allocation.
+  // Renders `items` seen by `camera` into the channels of `out` that are not
+  // null (only those are drawn). Unless `unoccluded_pixels` is empty, for
+  // every labelled item unoccluded_pixels[item.instance] receives the pixel
+  // count of its silhouette rendered alone (entries of ids not drawn are left
+  // untouched); the span must then have room for the largest instance id.
+  // No heap allocation once each set of channels has been drawn once.
   void Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
               std::span<uint32_t> unoccluded_pixels);
 

@@ -81,6 +81,7 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
                                           vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh, add_item);
   }
   static_item_count_ = items_.size();
+  for (DrawItem& item : items_) item.previous_world_from_model = item.world_from_model;  // they never move
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();
   // The scene's target car is red, as in the paper; other cars are blue.
   meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.80f, 0.10f, 0.10f}));
@@ -99,6 +100,7 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
 }
 
 void SceneGraphics::Update(const sim::State& state) {
+  previous_items_.assign(items_.begin(), items_.end());  // keeps its capacity
   items_.resize(static_item_count_);
   labelled_.clear();
   moving_.clear();
@@ -134,6 +136,22 @@ void SceneGraphics::Update(const sim::State& state) {
   }
   labelled_.insert(labelled_.end(), static_labelled_.begin(), static_labelled_.end());
   if (traffic_) traffic_->Append(state.traffic, state.sim_time, items_, labelled_, moving_);
+  LinkPreviousTransforms();
+  // Room for the next Update's copy now, so a warm Update never allocates.
+  previous_items_.reserve(items_.capacity());
+}
+
+// Items are rebuilt in the same order every frame (agents in State order,
+// then traffic), so an item is matched with the one at its index a frame ago
+// if that drew the same mesh for the same instance; anything else (a new
+// agent, a reordering after a removal) gets no motion of its own.
+void SceneGraphics::LinkPreviousTransforms() {
+  for (std::size_t i = static_item_count_; i < items_.size(); ++i) {
+    DrawItem& item = items_[i];
+    const bool same = i < previous_items_.size() && previous_items_[i].mesh == item.mesh &&
+                      previous_items_[i].instance == item.instance;
+    item.previous_world_from_model = same ? previous_items_[i].world_from_model : item.world_from_model;
+  }
 }
 
 CameraView SceneGraphics::CameraAt(const sim::CameraSpec& spec, const sim::State& state) const {

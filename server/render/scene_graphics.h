@@ -23,7 +23,8 @@ class SceneGraphics {
 
   const std::vector<Mesh>& meshes() const { return meshes_; }
 
-  // Brings everything that moves up to `state`: the draw items, the labelled
+  // Brings everything that moves up to `state`: the draw items (with their
+  // transforms of the previous Update, for optical flow), the labelled
   // objects and the moving objects' ground truth. Reuses its vectors: no
   // allocation per frame once the number of agents stops growing.
   void Update(const sim::State& state);
@@ -49,7 +50,11 @@ class SceneGraphics {
  private:
   const sim::Scene& scene_;
   std::vector<Mesh> meshes_;
+  // Fills each moving item's previous_world_from_model from previous_items_.
+  void LinkPreviousTransforms();
+
   std::vector<DrawItem> items_;
+  std::vector<DrawItem> previous_items_;  // items_ of the last Update
   std::size_t static_item_count_ = 0;
   MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0, pedestrian_mesh_ = 0;
   std::vector<LabelledObject> static_labelled_;

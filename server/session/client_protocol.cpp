@@ -138,24 +138,25 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
     return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, "Subscribe.channels is empty; ask for at least one channel",
                   false, reply);
   }
-  if (subscribe.channels_size() > proto::CHANNEL_BOXES) {
+  if (subscribe.channels_size() > channels::kSubscribableCount) {
     return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
                   "Subscribe.channels has " + std::to_string(subscribe.channels_size()) + " entries; at most " +
-                      std::to_string(proto::CHANNEL_BOXES) + ", each channel once",
+                      std::to_string(channels::kSubscribableCount) + ", each channel once: " + channels::ValidList(),
                   false, reply);
   }
-  uint32_t seen = 0;
+  channels::ChannelSet seen = 0;
   for (int channel : subscribe.channels()) {
-    if (channel < proto::CHANNEL_RGB || channel > proto::CHANNEL_BOXES) {
+    if (!channels::Subscribable(channel)) {
       return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
-                    "Subscribe.channels holds " + std::to_string(channel) + "; valid channels are 1 (RGB) to 4 (BOXES)",
+                    "Subscribe.channels holds " + std::to_string(channel) +
+                        ", which is no channel this daemon serves; valid channels are " + channels::ValidList(),
                     false, reply);
     }
-    if (seen & (1u << channel)) {
+    if (channels::Has(seen, channel)) {
       return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
                     "Subscribe.channels lists " + proto::Channel_Name(channel) + " twice", false, reply);
     }
-    seen |= 1u << channel;
+    seen |= channels::Bit(channel);
   }
   const proto::Delivery delivery = subscribe.delivery();
   if (delivery != proto::DELIVERY_LOCKSTEP && delivery != proto::DELIVERY_NEWEST) {
@@ -179,7 +180,7 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
   subscription_.set_delivery(delivery);
   mailbox_.Reset(delivery, &context_.commands);
   context_.commands.Post(
-      {client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, link_.lock(), mailbox_.gate()}});
+      {client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, seen, link_.lock(), mailbox_.gate()}});
   *reply.mutable_subscribed() = subscription_;
   return Outcome::kReply;
 }

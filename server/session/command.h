@@ -7,6 +7,8 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+
+#include "protocol/channels.h"
 #include <variant>
 
 #include "server/session/client_link.h"
@@ -27,6 +29,7 @@ inline ClientId NewClientId() {
 struct SubscribeCommand {
   uint32_t camera_index = 0;
   proto::Delivery delivery = proto::DELIVERY_NEWEST;
+  channels::ChannelSet channels = 0;  // what the frames must carry
   std::shared_ptr<ClientLink> link;  // where frames go
   std::shared_ptr<const MailboxGate> gate = nullptr;  // lockstep: whether the client's mailbox is full
 };

@@ -11,8 +11,9 @@ Scheduler::Subscription* Scheduler::Find(ClientId client) {
 }
 
 void Scheduler::Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery,
-                          std::shared_ptr<ClientLink> link, std::shared_ptr<const MailboxGate> gate) {
-  Subscription subscription{client, camera_index, delivery, 0, std::move(link), std::move(gate)};
+                          channels::ChannelSet channels, std::shared_ptr<ClientLink> link,
+                          std::shared_ptr<const MailboxGate> gate) {
+  Subscription subscription{client, camera_index, delivery, channels, 0, std::move(link), std::move(gate)};
   Subscription* existing = Find(client);
   if (existing) {
     // A replaced subscription keeps no credits: they were for the old one.
@@ -49,9 +50,14 @@ void Scheduler::ConsumeSteps() {
   }
 }
 
-bool Scheduler::CameraWanted(uint32_t camera_index) const {
-  return !Dead(camera_index) && std::any_of(subscriptions_.begin(), subscriptions_.end(),
-                                            [&](const Subscription& s) { return s.camera_index == camera_index; });
+channels::ChannelSet Scheduler::ChannelsWanted(uint32_t camera_index) const {
+  if (Dead(camera_index)) return 0;
+  channels::ChannelSet wanted = 0;
+  for (const auto& s : subscriptions_) {
+    // A subscription always wants something: a frame without pixels still carries its metadata.
+    if (s.camera_index == camera_index) wanted |= s.channels | channels::Bit(proto::CHANNEL_UNSPECIFIED);
+  }
+  return wanted;
 }
 
 std::optional<uint32_t> Scheduler::CameraOf(ClientId client) const {

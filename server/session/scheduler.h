@@ -15,8 +15,8 @@ namespace sim4cv::session {
 class Scheduler {
  public:
   // `gate` (may be null) tells whether the client's lockstep mailbox is full.
-  void Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery, std::shared_ptr<ClientLink> link,
-                 std::shared_ptr<const MailboxGate> gate = nullptr);
+  void Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery, channels::ChannelSet channels,
+                 std::shared_ptr<ClientLink> link, std::shared_ptr<const MailboxGate> gate = nullptr);
   // One Step from a lockstep subscriber: one credit. Others are ignored (the
   // transport has already refused them).
   void AddStep(ClientId client);
@@ -33,7 +33,10 @@ class Scheduler {
   void ConsumeSteps();
 
   // Whether anyone wants frames of this camera.
-  bool CameraWanted(uint32_t camera_index) const;
+  bool CameraWanted(uint32_t camera_index) const { return ChannelsWanted(camera_index) != 0; }
+  // What the camera's frames must hold: the union of its live subscribers'
+  // channels (0: none, nothing to render).
+  channels::ChannelSet ChannelsWanted(uint32_t camera_index) const;
   // The camera `client` is subscribed to, if any.
   std::optional<uint32_t> CameraOf(ClientId client) const;
   // Hands `frame` to every subscriber of its camera, in client-id order; with
@@ -64,6 +67,7 @@ class Scheduler {
     ClientId client = 0;
     uint32_t camera_index = 0;
     proto::Delivery delivery = proto::DELIVERY_NEWEST;
+    channels::ChannelSet channels = 0;
     uint64_t step_credits = 0;
     std::shared_ptr<ClientLink> link;
     std::shared_ptr<const MailboxGate> gate;

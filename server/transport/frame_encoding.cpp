@@ -28,28 +28,17 @@ void AppendVarint(std::string& out, uint32_t value) {
 std::size_t VarintSize(std::size_t value) { return CodedOutputStream::VarintSize32(static_cast<uint32_t>(value)); }
 
 struct PixelChannel {
-  proto::Channel channel;
-  proto::PixelFormat format;
-  const uint8_t* data;
-  uint32_t bytes_per_pixel;
+  const channels::ChannelInfo* info = nullptr;
+  const uint8_t* data = nullptr;
 };
 
-PixelChannel PixelsOf(const session::Frame& frame, int channel) {
-  switch (channel) {
-    case proto::CHANNEL_RGB: return {proto::CHANNEL_RGB, proto::PIXEL_FORMAT_RGB8, frame.rgb.data(), 3};
-    case proto::CHANNEL_DEPTH:
-      return {proto::CHANNEL_DEPTH, proto::PIXEL_FORMAT_DEPTH_F32, reinterpret_cast<const uint8_t*>(frame.depth.data()), 4};
-    case proto::CHANNEL_MASK:
-      return {proto::CHANNEL_MASK, proto::PIXEL_FORMAT_INSTANCE_U16, reinterpret_cast<const uint8_t*>(frame.mask.data()), 2};
-    default: return {proto::CHANNEL_UNSPECIFIED, proto::PIXEL_FORMAT_UNSPECIFIED, nullptr, 0};
-  }
-}
-
-void FillImageHeader(const PixelChannel& pixels, uint32_t width, proto::Image& image) {
+void FillImageHeader(const channels::ChannelInfo& info, uint32_t width, proto::Image& image) {
   image.Clear();
-  image.set_channel(pixels.channel);
-  image.set_format(pixels.format);
-  image.set_stride(width * pixels.bytes_per_pixel);
+  image.set_channel(info.id);
+  image.set_format(info.format);
+  image.set_stride(width * info.bytes_per_pixel);
+  image.set_element(info.element);
+  image.set_components(info.components);
 }
 
 using session::SetQuaternion;
@@ -141,16 +130,19 @@ void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera
   // Pass 1: sizes, since each length-delimited field is preceded by its size.
   const std::size_t pixel_count = static_cast<std::size_t>(frame.width) * frame.height;
   std::size_t frame_body = meta.ByteSizeLong();
-  std::array<std::size_t, 4> image_header_size{};
-  std::array<std::size_t, 4> image_data_size{};
-  std::array<PixelChannel, 4> pixel_channels{};
+  constexpr std::size_t kMax = channels::kPixelChannelCount;
+  std::array<std::size_t, kMax> image_header_size{};
+  std::array<std::size_t, kMax> image_data_size{};
+  std::array<PixelChannel, kMax> pixel_channels{};
   std::size_t image_count = 0;
   for (int channel : subscription.channels()) {
-    const PixelChannel pixels = PixelsOf(frame, channel);
-    if (!pixels.data) continue;
-    SIM4CV_DEMAND(image_count < pixel_channels.size());
-    FillImageHeader(pixels, frame.width, image_);
-    const std::size_t data_size = pixel_count * pixels.bytes_per_pixel;
+    const channels::ChannelInfo* info = channels::Find(channel);
+    if (info == nullptr) continue;  // BOXES
+    const PixelChannel pixels{info, frame.Pixels(channel)};
+    // The sim thread renders every channel a subscriber of the camera asked for.
+    SIM4CV_DEMAND(pixels.data != nullptr && image_count < kMax);
+    FillImageHeader(*info, frame.width, image_);
+    const std::size_t data_size = pixel_count * info->bytes_per_pixel;
     const std::size_t image_body = image_.ByteSizeLong() + VarintSize(kImageDataTag) + VarintSize(data_size) + data_size;
     frame_body += VarintSize(kFrameImagesTag) + VarintSize(image_body) + image_body;
     image_header_size[image_count] = image_body - data_size;
@@ -170,9 +162,9 @@ void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera
   AppendVarint(headers_, kEnvelopeFrameTag);
   AppendVarint(headers_, static_cast<uint32_t>(frame_body));
   meta.AppendToString(&headers_);
-  std::array<std::size_t, 4> header_end{};
+  std::array<std::size_t, kMax> header_end{};
   for (std::size_t i = 0; i < image_count; ++i) {
-    FillImageHeader(pixel_channels[i], frame.width, image_);
+    FillImageHeader(*pixel_channels[i].info, frame.width, image_);
     AppendVarint(headers_, kFrameImagesTag);
     AppendVarint(headers_, static_cast<uint32_t>(image_header_size[i] + image_data_size[i]));
     image_.AppendToString(&headers_);

@@ -47,7 +47,8 @@ class FrameEncoder {
   std::optional<google::protobuf::Arena> arena_;
   proto::Image image_;  // reused: one image's header fields
   std::string headers_;  // every non-pixel byte, in wire order
-  std::array<Segment, 8> segments_{};
+  // A header before each image's pixels, then the tail.
+  std::array<Segment, 2 * channels::kPixelChannelCount + 1> segments_{};
   std::size_t segment_count_ = 0;
   std::size_t total_size_ = 0;
 };

@@ -58,7 +58,7 @@ class ShmHostileTest : public ShmDaemonTest {
       OwnedFrame frame;
       ASSERT_TRUE(observer_->ReadNewest(frame));
       EXPECT_EQ(frame.frame_id, id);
-      EXPECT_EQ(frame.rgb.size(), static_cast<std::size_t>(320 * 180 * 3));
+      EXPECT_EQ(frame.planes[0].size(), static_cast<std::size_t>(320 * 180 * 3));  // RGB
       const auto start = std::chrono::steady_clock::now();
       const proto::State state = observer_->GetState(2000ms);
       EXPECT_LT(std::chrono::steady_clock::now() - start, 2000ms);

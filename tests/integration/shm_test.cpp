@@ -130,11 +130,24 @@ void ExpectSameBoxesAndPoses(const OwnedFrame& owned, const proto::Frame& frame)
   }
 }
 
-// Steps a TCP lockstep client (all channels) `frames` times; for each frame,
-// `check` gets the ring's copy of the same frame id and the TCP Frame.
+// The ring's copy of `channel` holds the very bytes TCP sent.
+void ExpectSamePlane(const OwnedFrame& owned, const proto::Frame& frame, proto::Channel channel) {
+  const auto sent = FindImage(frame, channel);
+  const auto copied = owned.image(channel);
+  ASSERT_TRUE(sent && copied) << proto::Channel_Name(channel);
+  ASSERT_EQ(copied->stride, sent->stride) << proto::Channel_Name(channel);
+  EXPECT_EQ(copied->element, sent->element);
+  EXPECT_EQ(copied->components, sent->components);
+  EXPECT_EQ(std::memcmp(copied->data, sent->data, std::size_t{sent->stride} * frame.height()), 0)
+      << proto::Channel_Name(channel) << " differs";
+}
+
+// Steps a TCP lockstep client (`subscribed` channels) `frames` times; for each
+// frame, `check` gets the ring's copy of the same frame id and the TCP Frame.
 template <typename Check>
-void CompareWithTcp(Client& tcp, ShmClient& shm, int frames, Check check) {
-  tcp.Subscribe("uav", kAllChannels, proto::DELIVERY_LOCKSTEP, /*with_state=*/true);
+void CompareWithTcp(Client& tcp, ShmClient& shm, int frames, Check check,
+                    const std::vector<proto::Channel>& subscribed = kAllChannels) {
+  tcp.Subscribe("uav", subscribed, proto::DELIVERY_LOCKSTEP, /*with_state=*/true);
   OwnedFrame owned;
   for (int i = 0; i < frames; ++i) {
     const proto::Frame& frame = tcp.StepAndReceive();
@@ -146,10 +159,7 @@ void CompareWithTcp(Client& tcp, ShmClient& shm, int frames, Check check) {
     EXPECT_EQ(owned.render_end_mono_ns, frame.render_end_mono_ns());
     ASSERT_EQ(owned.width, frame.width());
     ASSERT_EQ(owned.height, frame.height());
-    const auto rgb = FindImage(frame, proto::CHANNEL_RGB);
-    ASSERT_TRUE(rgb.has_value());
-    ASSERT_EQ(owned.rgb.size(), static_cast<std::size_t>(frame.width()) * frame.height() * 3);
-    EXPECT_EQ(std::memcmp(owned.rgb.data(), rgb->data, owned.rgb.size()), 0) << "RGB differs";
+    ExpectSamePlane(owned, frame, proto::CHANNEL_RGB);
     ExpectSameBoxesAndPoses(owned, frame);
     check(owned, frame);
   }
@@ -160,14 +170,29 @@ TEST_F(ShmDaemonTest, FramesAreByteIdenticalToTcpFrames) {
   auto tcp = Connect("tcp-lockstep");
   auto shm = OpenShm();
   CompareWithTcp(*tcp, *shm, 4, [](const OwnedFrame& owned, const proto::Frame& frame) {
-    const auto depth = FindImage(frame, proto::CHANNEL_DEPTH);
-    const auto mask = FindImage(frame, proto::CHANNEL_MASK);
-    ASSERT_TRUE(depth && mask && owned.has(proto::CHANNEL_DEPTH) && owned.has(proto::CHANNEL_MASK));
-    ASSERT_EQ(owned.depth.size(), owned.rgb.size() / 3);
-    ASSERT_EQ(owned.mask.size(), owned.rgb.size() / 3);
-    EXPECT_EQ(std::memcmp(owned.depth.data(), depth->data, owned.depth.size() * 4), 0) << "DEPTH differs";
-    EXPECT_EQ(std::memcmp(owned.mask.data(), mask->data, owned.mask.size() * 2), 0) << "MASK differs";
+    ExpectSamePlane(owned, frame, proto::CHANNEL_DEPTH);
+    ExpectSamePlane(owned, frame, proto::CHANNEL_MASK);
   });
+}
+
+// A ring carrying every channel: semantic, normals and flow reach a shm
+// client byte for byte as TCP sends them.
+TEST_F(ShmDaemonTest, EveryChannelIsByteIdenticalToTcp) {
+  StartShmDaemon({"--shm-channels", "rgb,depth,mask,semantic,normals,flow"});
+  auto tcp = Connect("tcp-lockstep");
+  auto shm = OpenShm();
+  const std::vector<proto::Channel> every{proto::CHANNEL_RGB,      proto::CHANNEL_DEPTH,   proto::CHANNEL_MASK,
+                                          proto::CHANNEL_SEMANTIC, proto::CHANNEL_NORMALS, proto::CHANNEL_FLOW,
+                                          proto::CHANNEL_BOXES};
+  CompareWithTcp(
+      *tcp, *shm, 3,
+      [](const OwnedFrame& owned, const proto::Frame& frame) {
+        for (const auto channel : {proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_SEMANTIC,
+                                   proto::CHANNEL_NORMALS, proto::CHANNEL_FLOW}) {
+          ExpectSamePlane(owned, frame, channel);
+        }
+      },
+      every);
 }
 
 // --shm-channels rgb: the same RGB bytes as TCP sends, depth and mask absent
@@ -183,7 +208,7 @@ TEST_F(ShmDaemonTest, RgbOnlyRingCarriesTcpsRgbAndNothingElse) {
   CompareWithTcp(*tcp, *shm, 4, [](const OwnedFrame& owned, const proto::Frame&) {
     EXPECT_FALSE(owned.has(proto::CHANNEL_DEPTH));
     EXPECT_FALSE(owned.has(proto::CHANNEL_MASK));
-    EXPECT_TRUE(owned.depth.empty() && owned.mask.empty());
+    EXPECT_FALSE(owned.image(proto::CHANNEL_DEPTH) || owned.image(proto::CHANNEL_MASK));
   });
   FrameView view;
   ASSERT_TRUE(shm->AcquireNewest(view));

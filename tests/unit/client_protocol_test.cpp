@@ -249,10 +249,11 @@ TEST_F(ClientProtocolTest, EmptyChannelsAreRefused) {
 TEST_F(ClientProtocolTest, OutOfRangeChannelsAreRefused) {
   Handshake();
   ExpectError(Send(Subscribe("uav", {0})), proto::ERROR_CODE_INVALID_ARGUMENT, false,
-              {"Subscribe.channels holds 0", "1 (RGB) to 4 (BOXES)"});
+              {"Subscribe.channels holds 0", "which is no channel this daemon serves",
+               "valid channels are 1 (RGB), 2 (DEPTH), 3 (MASK), 5 (SEMANTIC), 6 (NORMALS), 7 (FLOW), and 4 (BOXES)"});
   ExpectError(Send(Subscribe("uav", {proto::CHANNEL_RGB, 99})), proto::ERROR_CODE_INVALID_ARGUMENT, false,
               {"holds 99"});
-  ExpectError(Send(Subscribe("uav", {5})), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"holds 5"});
+  ExpectError(Send(Subscribe("uav", {8})), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"holds 8"});
   ExpectError(Send(Subscribe("uav", {-1})), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"holds -1"});
 }
 
@@ -645,7 +646,7 @@ TEST_F(ClientProtocolTest, OverlongCameraNameIsRefusedWithASmallError) {
 TEST_F(ClientProtocolTest, MoreChannelsThanThereAreIsRefusedBeforeLooking) {
   Handshake();
   ExpectError(Send(Subscribe("uav", std::vector<int>(100000, proto::CHANNEL_RGB))), proto::ERROR_CODE_INVALID_ARGUMENT,
-              false, {"Subscribe.channels has 100000 entries", "at most 4"});
+              false, {"Subscribe.channels has 100000 entries", "at most 7"});
 }
 
 proto::Envelope GetWorldRequest(uint32_t request_id) {

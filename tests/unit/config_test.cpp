@@ -229,7 +229,7 @@ TEST(ConfigTest, ShmChannels) {
   EXPECT_EQ(Parse({"--shm-channels", "depth"}).shm_channel_mask, 1u << proto::CHANNEL_DEPTH);
   // Each refusal names the flag, the value and what is wrong with it.
   ExpectMentions(ParseError({"--shm-channels", "rgb,boxes"}),
-                 {"--shm-channels is 'rgb,boxes'", "'boxes' is not a channel", "rgb, depth and/or mask"});
+                 {"--shm-channels is 'rgb,boxes'", "'boxes' is not a channel", "use rgb,depth,mask,semantic,normals,flow"});
   ExpectMentions(ParseError({"--shm-channels", "RGB"}), {"--shm-channels is 'RGB'", "'RGB' is not a channel"});
   ExpectMentions(ParseError({"--shm-channels", "rgb, depth"}), {"--shm-channels", "' depth' is not a channel"});
   ExpectMentions(ParseError({"--shm-channels", ""}), {"--shm-channels is ''", "'' is not a channel"});

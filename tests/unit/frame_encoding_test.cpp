@@ -34,13 +34,13 @@ class FrameEncodingTest : public ::testing::Test {
     f.width = width;
     f.height = height;
     f.render_end_mono_ns = -42;  // any int64 survives
-    f.rgb.resize(pixels * 3);
-    for (std::size_t i = 0; i < f.rgb.size(); ++i) f.rgb[i] = static_cast<uint8_t>(i * 7 + 3);
-    f.depth.resize(pixels);
-    for (std::size_t i = 0; i < pixels; ++i) f.depth[i] = 0.5f + static_cast<float>(i) * 1.25f;
-    f.depth[pixels - 1] = std::numeric_limits<float>::infinity();
-    f.mask.resize(pixels);
-    for (std::size_t i = 0; i < pixels; ++i) f.mask[i] = static_cast<uint16_t>(i % 3 == 0 ? 0 : 100 + i * 517);
+    const auto rgb = f.Hold(proto::CHANNEL_RGB);
+    for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<uint8_t>(i * 7 + 3);
+    const auto depth = f.Hold<float>(proto::CHANNEL_DEPTH);
+    for (std::size_t i = 0; i < pixels; ++i) depth[i] = 0.5f + static_cast<float>(i) * 1.25f;
+    depth[pixels - 1] = std::numeric_limits<float>::infinity();
+    const auto mask = f.Hold<uint16_t>(proto::CHANNEL_MASK);
+    for (std::size_t i = 0; i < pixels; ++i) mask[i] = static_cast<uint16_t>(i % 3 == 0 ? 0 : 100 + i * 517);
     f.boxes.clear();
     render::GroundTruthBox car;
     car.instance = 1;
@@ -133,7 +133,7 @@ class FrameEncodingTest : public ::testing::Test {
         EXPECT_EQ(image.format(), proto::PIXEL_FORMAT_RGB8);
         EXPECT_EQ(image.stride(), frame_->width * 3);
         ASSERT_EQ(image.data().size(), pixels * 3);
-        EXPECT_EQ(0, std::memcmp(image.data().data(), frame_->rgb.data(), pixels * 3));
+        EXPECT_EQ(0, std::memcmp(image.data().data(), frame_->Pixels(proto::CHANNEL_RGB), pixels * 3));
         break;
       case proto::CHANNEL_DEPTH: {
         EXPECT_EQ(image.format(), proto::PIXEL_FORMAT_DEPTH_F32);
@@ -141,7 +141,7 @@ class FrameEncodingTest : public ::testing::Test {
         ASSERT_EQ(image.data().size(), pixels * 4);
         std::vector<float> depth(pixels);
         std::memcpy(depth.data(), image.data().data(), pixels * 4);
-        EXPECT_EQ(depth, frame_->depth);
+        EXPECT_TRUE(std::ranges::equal(depth, frame_->Plane<float>(proto::CHANNEL_DEPTH)));
         break;
       }
       case proto::CHANNEL_MASK: {
@@ -152,7 +152,7 @@ class FrameEncodingTest : public ::testing::Test {
         for (std::size_t i = 0; i < pixels; ++i) {
           const auto lo = static_cast<uint8_t>(image.data()[2 * i]);
           const auto hi = static_cast<uint8_t>(image.data()[2 * i + 1]);
-          ASSERT_EQ(static_cast<uint16_t>(lo | (hi << 8)), frame_->mask[i]) << "pixel " << i;
+          ASSERT_EQ(static_cast<uint16_t>(lo | (hi << 8)), frame_->Plane<uint16_t>(proto::CHANNEL_MASK)[i]) << "pixel " << i;
         }
         break;
       }
@@ -241,15 +241,15 @@ class FrameEncodingTest : public ::testing::Test {
       const Segment& s = segments[2 * i + 1];
       switch (pixel_channels[i]) {
         case proto::CHANNEL_RGB:
-          EXPECT_EQ(s.data, frame_->rgb.data());
+          EXPECT_EQ(s.data, frame_->Pixels(proto::CHANNEL_RGB));
           EXPECT_EQ(s.size, pixels * 3);
           break;
         case proto::CHANNEL_DEPTH:
-          EXPECT_EQ(s.data, reinterpret_cast<const uint8_t*>(frame_->depth.data()));
+          EXPECT_EQ(s.data, frame_->Pixels(proto::CHANNEL_DEPTH));
           EXPECT_EQ(s.size, pixels * 4);
           break;
         case proto::CHANNEL_MASK:
-          EXPECT_EQ(s.data, reinterpret_cast<const uint8_t*>(frame_->mask.data()));
+          EXPECT_EQ(s.data, frame_->Pixels(proto::CHANNEL_MASK));
           EXPECT_EQ(s.size, pixels * 2);
           break;
         default: ADD_FAILURE();

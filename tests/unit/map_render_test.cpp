@@ -23,6 +23,7 @@
 #include "server/render/gl_context.h"
 #include "server/render/object_meshes.h"
 #include "server/render/renderer.h"
+#include "tests/support/rendered_frame.h"
 #include "server/sim/map/map_text.h"
 #include "sim4cv.pb.h"
 
@@ -161,16 +162,7 @@ TEST(MapDrawablesTest, ObjectMeshesMatchTheirShapes) {
   }
 }
 
-struct Frame {
-  uint32_t width, height;
-  std::vector<uint8_t> rgb;
-  std::vector<float> depth;
-  std::vector<uint16_t> mask;
-
-  Frame(uint32_t w, uint32_t h)
-      : width(w), height(h), rgb(size_t{w} * h * 3), depth(size_t{w} * h), mask(size_t{w} * h) {}
-  size_t At(uint32_t x, uint32_t y) const { return size_t{y} * width + x; }
-};
+using Frame = testing::RenderedFrame;
 
 // The map's drawables uploaded into a Renderer, ready to draw.
 struct MapScene {
@@ -191,7 +183,7 @@ struct MapScene {
 
   Frame Render(const CameraView& camera) {
     Frame frame(camera.width, camera.height);
-    renderer->Render(camera, items, {frame.rgb.data(), frame.depth.data(), frame.mask.data()}, unoccluded);
+    renderer->Render(camera, items, frame.Buffers(), unoccluded);
     return frame;
   }
 };
@@ -411,7 +403,7 @@ TEST_F(MapRenderTest, DensestUrbanMapRendersQuickly) {
       {"whole_map", TopDown(scene.built.map, kWidth, kHeight)}};
   for (const auto& [name, camera] : views) {
     Frame frame = scene.Render(camera);  // warm up: first-use costs
-    const FrameBuffers buffers{frame.rgb.data(), frame.depth.data(), frame.mask.data()};
+    const FrameBuffers buffers = frame.Buffers();
     const auto start = std::chrono::steady_clock::now();
     for (int i = 0; i < kFrames; ++i) scene.renderer->Render(camera, scene.items, buffers, scene.unoccluded);
     const double ms =

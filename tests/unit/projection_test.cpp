@@ -16,6 +16,7 @@
 #include "server/render/ground_truth.h"
 #include "server/render/mesh_builder.h"
 #include "server/render/renderer.h"
+#include "tests/support/rendered_frame.h"
 
 namespace sim4cv::render {
 namespace {
@@ -156,11 +157,10 @@ TEST(BoxProjector, MatchesTheRenderedSilhouette) {
   const Eigen::Vector3d centre(1, 0.5, 0.4);
   const Eigen::Quaterniond yaw(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()));
   const DrawItem item{0, PoseMatrix(centre.cast<float>(), yaw.cast<float>()), 5};
-  std::vector<uint8_t> rgb(kWidth * kHeight * 3);
-  std::vector<float> depth(kWidth * kHeight);
-  std::vector<uint16_t> mask(kWidth * kHeight);
+  testing::RenderedFrame frame(kWidth, kHeight);
+  const std::vector<uint16_t>& mask = frame.mask;
   std::vector<uint32_t> unoccluded(8);
-  renderer.Render(view, std::span(&item, 1), {rgb.data(), depth.data(), mask.data()}, unoccluded);
+  renderer.Render(view, std::span(&item, 1), frame.Buffers(), unoccluded);
   BoxExtractor extractor;
   std::vector<GroundTruthBox> boxes;
   const LabelledObject object{5, 1, unoccluded[5]};

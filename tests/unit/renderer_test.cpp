@@ -1,4 +1,5 @@
 #include "server/render/renderer.h"
+#include "tests/support/rendered_frame.h"
 
 #include <gtest/gtest.h>
 
@@ -22,19 +23,11 @@ constexpr MeshId kUnitCube = 0;  // half extent 0.5 m
 constexpr MeshId kCar = 1;
 constexpr uint32_t kUntouched = 12345;
 
-struct Frame {
-  uint32_t width, height;
-  std::vector<uint8_t> rgb;
-  std::vector<float> depth;
-  std::vector<uint16_t> mask;
+// A frame plus unoccluded-pixel counts that start at kUntouched, to tell
+// "counted as zero" from "not counted".
+struct Frame : testing::RenderedFrame {
   std::array<uint32_t, 8> unoccluded;
-
-  Frame(uint32_t w, uint32_t h) : width(w), height(h), rgb(size_t{w} * h * 3), depth(size_t{w} * h), mask(size_t{w} * h) {
-    unoccluded.fill(kUntouched);
-  }
-  FrameBuffers Buffers() { return {rgb.data(), depth.data(), mask.data()}; }
-  size_t At(uint32_t x, uint32_t y) const { return size_t{y} * width + x; }
-  uint32_t Count(InstanceId id) const { return static_cast<uint32_t>(std::count(mask.begin(), mask.end(), id)); }
+  Frame(uint32_t w, uint32_t h) : RenderedFrame(w, h) { unoccluded.fill(kUntouched); }
 };
 
 // Looks along world +x from the origin, z up: world +y is image left.
@@ -189,8 +182,8 @@ TEST_F(RendererTest, ItemOutsideTheFrustumLeavesNoTrace) {
 
 TEST_F(RendererTest, NullChannelsAreSkipped) {
   Frame frame(kWidth, kHeight);
-  FrameBuffers mask_only;
-  mask_only.mask = frame.mask.data();
+  FrameBuffers mask_only{};
+  mask_only[2] = reinterpret_cast<uint8_t*>(frame.mask.data());
   renderer_->Render(ForwardCamera(), std::vector<DrawItem>{Item(kUnitCube, {5, 0, 0}, 1)}, mask_only, frame.unoccluded);
   EXPECT_GT(frame.Count(1), 0u);
   EXPECT_TRUE(std::all_of(frame.rgb.begin(), frame.rgb.end(), [](uint8_t v) { return v == 0; }));

@@ -90,9 +90,9 @@ class SimStandIn {
     frame->camera_name = camera_name;
     frame->width = kWidth;
     frame->height = kHeight;
-    frame->rgb.assign(static_cast<std::size_t>(kWidth) * kHeight * 3, static_cast<uint8_t>(id));
-    frame->depth.assign(static_cast<std::size_t>(kWidth) * kHeight, static_cast<float>(id));
-    frame->mask.assign(static_cast<std::size_t>(kWidth) * kHeight, static_cast<uint16_t>(id));
+    std::ranges::fill(frame->Hold(proto::CHANNEL_RGB), static_cast<uint8_t>(id));
+    std::ranges::fill(frame->Hold<float>(proto::CHANNEL_DEPTH), static_cast<float>(id));
+    std::ranges::fill(frame->Hold<uint16_t>(proto::CHANNEL_MASK), static_cast<uint16_t>(id));
     return ref;
   }
 

@@ -12,6 +12,8 @@
 namespace sim4cv::session {
 namespace {
 
+constexpr channels::ChannelSet kRgb = channels::Bit(proto::CHANNEL_RGB);
+
 // Records the frames offered to it, tagged with its own name.
 class RecordingLink : public ClientLink {
  public:
@@ -55,7 +57,7 @@ TEST_F(SchedulerTest, NoSubscribersIsNotReady) {
 }
 
 TEST_F(SchedulerTest, SingleLockstepClientNeedsAStep) {
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(1));
   EXPECT_FALSE(scheduler_.LockstepReady());
   scheduler_.AddStep(1);
   EXPECT_TRUE(scheduler_.LockstepReady());
@@ -64,8 +66,8 @@ TEST_F(SchedulerTest, SingleLockstepClientNeedsAStep) {
 }
 
 TEST_F(SchedulerTest, TwoLockstepClientsReadyOnlyWhenBothStepped) {
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(1));
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(2));
   EXPECT_FALSE(scheduler_.LockstepReady());
   scheduler_.AddStep(1);
   EXPECT_FALSE(scheduler_.LockstepReady());
@@ -83,7 +85,7 @@ TEST_F(SchedulerTest, TwoLockstepClientsReadyOnlyWhenBothStepped) {
 }
 
 TEST_F(SchedulerTest, CreditsAccumulate) {
-  scheduler_.Subscribe(3, 0, proto::DELIVERY_LOCKSTEP, Link(3));
+  scheduler_.Subscribe(3, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(3));
   for (int i = 0; i < 5; ++i) scheduler_.AddStep(3);
   for (int i = 0; i < 5; ++i) {
     EXPECT_TRUE(scheduler_.LockstepReady()) << "round " << i;
@@ -111,8 +113,8 @@ class MailboxLink : public ClientLink {
 TEST_F(SchedulerTest, AFullLockstepMailboxHoldsTheSimulationBack) {
   auto silent = std::make_shared<MailboxLink>(proto::DELIVERY_LOCKSTEP);
   auto reader = std::make_shared<MailboxLink>(proto::DELIVERY_LOCKSTEP);
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, silent, silent->mailbox.gate());
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, reader, reader->mailbox.gate());
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, silent, silent->mailbox.gate());
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, kRgb, reader, reader->mailbox.gate());
   for (std::size_t i = 0; i < FrameMailbox::kMaxLockstepBacklog; ++i) {
     scheduler_.AddStep(1);
     scheduler_.AddStep(2);
@@ -139,8 +141,8 @@ TEST_F(SchedulerTest, AFullLockstepMailboxHoldsTheSimulationBack) {
 // A full mailbox on a dead camera holds nobody back, like missing credits.
 TEST_F(SchedulerTest, AFullMailboxOnADeadCameraDoesNotGate) {
   auto silent = std::make_shared<MailboxLink>(proto::DELIVERY_LOCKSTEP);
-  scheduler_.Subscribe(1, 1, proto::DELIVERY_LOCKSTEP, silent, silent->mailbox.gate());
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  scheduler_.Subscribe(1, 1, proto::DELIVERY_LOCKSTEP, kRgb, silent, silent->mailbox.gate());
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(2));
   for (std::size_t i = 0; i < FrameMailbox::kLockstepCapacity; ++i) silent->mailbox.Offer(MakeFrame(i + 1, 1));
   scheduler_.AddStep(1);
   scheduler_.AddStep(2);
@@ -151,7 +153,7 @@ TEST_F(SchedulerTest, AFullMailboxOnADeadCameraDoesNotGate) {
 
 TEST_F(SchedulerTest, NewestSubscribersNeverMakeItReadyButReceiveFrames) {
   auto newest = Link(1);
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, newest);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, kRgb, newest);
   scheduler_.AddStep(1);  // ignored for newest-frame subscribers
   scheduler_.AddStep(1);
   EXPECT_FALSE(scheduler_.LockstepReady());
@@ -161,7 +163,7 @@ TEST_F(SchedulerTest, NewestSubscribersNeverMakeItReadyButReceiveFrames) {
 
   // Alongside a lockstep client, only the lockstep client gates.
   auto lockstep = Link(2);
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, lockstep);
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, kRgb, lockstep);
   EXPECT_FALSE(scheduler_.LockstepReady());
   scheduler_.AddStep(2);
   EXPECT_TRUE(scheduler_.LockstepReady());
@@ -172,8 +174,8 @@ TEST_F(SchedulerTest, NewestSubscribersNeverMakeItReadyButReceiveFrames) {
 }
 
 TEST_F(SchedulerTest, RemoveUnblocksTheOthers) {
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(1));
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(2));
   scheduler_.AddStep(1);
   EXPECT_FALSE(scheduler_.LockstepReady());
   scheduler_.Remove(2);
@@ -189,8 +191,8 @@ TEST_F(SchedulerTest, RemoveUnblocksTheOthers) {
 TEST_F(SchedulerTest, RemovedClientGetsNoFrames) {
   auto a = Link(1);
   auto b = Link(2);
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, a);
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, b);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, kRgb, a);
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, kRgb, b);
   scheduler_.Remove(1);
   scheduler_.Deliver(MakeFrame(5, 0));
   EXPECT_TRUE(a->frames.empty());
@@ -198,11 +200,11 @@ TEST_F(SchedulerTest, RemovedClientGetsNoFrames) {
 }
 
 TEST_F(SchedulerTest, ResubscribeResetsCredits) {
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(1));
   scheduler_.AddStep(1);
   scheduler_.AddStep(1);
   EXPECT_TRUE(scheduler_.LockstepReady());
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(1));
   EXPECT_EQ(scheduler_.subscriber_count(), 1u);  // replaced, not added
   EXPECT_FALSE(scheduler_.LockstepReady());
   scheduler_.AddStep(1);
@@ -210,19 +212,19 @@ TEST_F(SchedulerTest, ResubscribeResetsCredits) {
 }
 
 TEST_F(SchedulerTest, ResubscribeAsNewestStopsGating) {
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, Link(1));
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, Link(2));
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(1));
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_LOCKSTEP, kRgb, Link(2));
   scheduler_.AddStep(1);
   EXPECT_FALSE(scheduler_.LockstepReady());
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, Link(2));
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, kRgb, Link(2));
   EXPECT_TRUE(scheduler_.LockstepReady());
 }
 
 TEST_F(SchedulerTest, ResubscribeReplacesTheLinkAndCamera) {
   auto old_link = Link(1);
   auto new_link = Link(1);
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, old_link);
-  scheduler_.Subscribe(1, 1, proto::DELIVERY_NEWEST, new_link);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, kRgb, old_link);
+  scheduler_.Subscribe(1, 1, proto::DELIVERY_NEWEST, kRgb, new_link);
   EXPECT_FALSE(scheduler_.CameraWanted(0));
   EXPECT_TRUE(scheduler_.CameraWanted(1));
   scheduler_.Deliver(MakeFrame(1, 1));
@@ -236,10 +238,10 @@ TEST_F(SchedulerTest, DeliverReachesOnlyThatCamerasSubscribersInClientIdOrder) {
   auto c2 = Link(2);
   auto c9 = Link(9);
   auto c1 = Link(1);
-  scheduler_.Subscribe(5, 0, proto::DELIVERY_NEWEST, c5);
-  scheduler_.Subscribe(2, 1, proto::DELIVERY_NEWEST, c2);
-  scheduler_.Subscribe(9, 0, proto::DELIVERY_LOCKSTEP, c9);
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, c1);
+  scheduler_.Subscribe(5, 0, proto::DELIVERY_NEWEST, kRgb, c5);
+  scheduler_.Subscribe(2, 1, proto::DELIVERY_NEWEST, kRgb, c2);
+  scheduler_.Subscribe(9, 0, proto::DELIVERY_LOCKSTEP, kRgb, c9);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, kRgb, c1);
   EXPECT_TRUE(scheduler_.CameraWanted(0));
   EXPECT_TRUE(scheduler_.CameraWanted(1));
   EXPECT_FALSE(scheduler_.CameraWanted(2));
@@ -264,8 +266,8 @@ TEST_F(SchedulerTest, DeliverSharesOneFrameWithoutCopying) {
   };
   auto a = std::make_shared<AddressLink>();
   auto b = std::make_shared<AddressLink>();
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, a);
-  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, b);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_NEWEST, kRgb, a);
+  scheduler_.Subscribe(2, 0, proto::DELIVERY_NEWEST, kRgb, b);
   {
     const FrameRef frame = MakeFrame(1, 0);
     scheduler_.Deliver(frame);
@@ -285,7 +287,7 @@ TEST_F(SchedulerTest, AnObserverSeesFramesFirstAndSubscribersOnlyAtRelease) {
   auto client = Link(1);
   scheduler_.SetObserver(observer.get());
   EXPECT_FALSE(scheduler_.CameraWanted(1)) << "an observer subscribes to nothing";
-  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, client);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, client);
   EXPECT_EQ(scheduler_.CameraOf(1), 0u);
   EXPECT_EQ(scheduler_.CameraOf(2), std::nullopt);
   scheduler_.Deliver(MakeFrame(7, 0));

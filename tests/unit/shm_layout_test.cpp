@@ -29,7 +29,7 @@ static_assert(offsetof(ShmHeader, magic) == 0 && offsetof(ShmHeader, layout_vers
 static_assert(offsetof(ShmHeader, slot_count) == 24 && offsetof(ShmHeader, slot_bytes) == 32);
 static_assert(offsetof(ShmHeader, camera_width) == 48 && offsetof(ShmHeader, writer_pid) == 56);
 static_assert(offsetof(ShmHeader, expiry_ms) == 136 && offsetof(ShmHeader, protocol_version) == 140);
-static_assert(offsetof(ShmHeader, channel_mask) == 152 && kShmAllPixelChannels == 0x0e);
+static_assert(offsetof(ShmHeader, channel_mask) == 152 && channels::kAllPixels == 0xee);
 static_assert(offsetof(ShmHeader, newest_frame_id) == 200 && offsetof(ShmHeader, closed) == 216);
 static_assert(offsetof(ShmFrameHeader, publication) == 8 && offsetof(ShmFrameHeader, frame_id) == 16);
 static_assert(offsetof(ShmFrameHeader, render_end_mono_ns) == 32 && offsetof(ShmFrameHeader, channel_mask) == 48);
@@ -44,23 +44,29 @@ static_assert(offsetof(ShmHeader, published) % 8 == 0 && offsetof(ShmHeader, fra
 static_assert(offsetof(ShmAreaHeader, request_write) % 8 == 0 && offsetof(ShmAreaHeader, request_read) % 8 == 0);
 static_assert(offsetof(ShmAreaHeader, response_futex) % 4 == 0);
 
+constexpr uint32_t kRgb = 0, kDepth = 1, kMask = 2, kSemantic = 3, kNormals = 4, kFlow = 5;  // plane indices
+constexpr channels::ChannelSet kThree = channels::Bit(proto::CHANNEL_RGB) | channels::Bit(proto::CHANNEL_DEPTH) |
+                                        channels::Bit(proto::CHANNEL_MASK);
+static_assert(channels::IndexOf(proto::CHANNEL_FLOW) == kFlow && channels::IndexOf(proto::CHANNEL_SEMANTIC) == kSemantic);
+
 TEST(ShmLayout, GeometryAlignsSlotsAndPlanes) {
   for (auto [w, h] : {std::pair{320u, 180u}, {17u, 19u}, {1280u, 720u}, {16u, 16u}}) {
     const Geometry g = ComputeGeometry(w, h, 8);
     const uint64_t pixels = static_cast<uint64_t>(w) * h;
-    EXPECT_EQ(g.rgb_offset, kShmFrameHeaderBytes);
-    EXPECT_EQ(g.depth_offset % kShmAlignment, 0u);
-    EXPECT_EQ(g.mask_offset % kShmAlignment, 0u);
-    EXPECT_GE(g.depth_offset, g.rgb_offset + pixels * 3);
-    EXPECT_GE(g.mask_offset, g.depth_offset + pixels * 4);
-    EXPECT_GE(g.slot_bytes, g.mask_offset + pixels * 2);
+    EXPECT_EQ(g.offsets[kRgb], kShmFrameHeaderBytes);
+    for (std::size_t i = 1; i < channels::kPixelChannelCount; ++i) {
+      EXPECT_EQ(g.offsets[i] % kShmAlignment, 0u);
+      EXPECT_GE(g.offsets[i], g.offsets[i - 1] + pixels * channels::kPixelChannels[i - 1].bytes_per_pixel);
+    }
+    EXPECT_GE(g.slot_bytes, g.offsets[kFlow] + pixels * 8);
     EXPECT_EQ(g.slot_bytes % 4096, 0u);
     EXPECT_EQ(g.slots_offset, 4096u);
     EXPECT_EQ(g.total_bytes, g.slots_offset + 8 * g.slot_bytes);
   }
-  // The figures docs/protocol.md quotes.
-  EXPECT_EQ(ComputeGeometry(320, 180, 8).slot_bytes, 528384u);
-  EXPECT_EQ(ComputeGeometry(320, 180, 8).total_bytes, 4231168u);
+  // The figures docs/protocol.md quotes: the default --shm-channels, and all six.
+  EXPECT_EQ(ComputeGeometry(320, 180, 8, kThree).slot_bytes, 528384u);
+  EXPECT_EQ(ComputeGeometry(320, 180, 8, kThree).total_bytes, 4231168u);
+  EXPECT_EQ(ComputeGeometry(320, 180, 8).slot_bytes, 1736704u);
   EXPECT_EQ(kAreaRequestOffset, 256u);
   EXPECT_EQ(kAreaResponseOffset, 16640u);
   EXPECT_EQ(kAreaBytes, 36864u);
@@ -69,23 +75,24 @@ TEST(ShmLayout, GeometryAlignsSlotsAndPlanes) {
 TEST(ShmLayout, SlotsHoldOnlyTheRingsChannels) {
   constexpr uint64_t kPixels = 320 * 180;
   // RGB alone: the figures docs/protocol.md quotes for --shm-channels rgb.
-  const Geometry rgb = ComputeGeometry(320, 180, 8, ChannelBit(kShmChannelRgb));
-  EXPECT_EQ(rgb.rgb_offset, kShmFrameHeaderBytes);
-  EXPECT_EQ(rgb.depth_offset, 0u);
-  EXPECT_EQ(rgb.mask_offset, 0u);
+  const Geometry rgb = ComputeGeometry(320, 180, 8, channels::Bit(proto::CHANNEL_RGB));
+  EXPECT_EQ(rgb.offsets[kRgb], kShmFrameHeaderBytes);
+  for (std::size_t i = 1; i < channels::kPixelChannelCount; ++i) EXPECT_EQ(rgb.offsets[i], 0u);
   EXPECT_EQ(rgb.slot_bytes, 184320u);
   EXPECT_EQ(rgb.total_bytes, 4096u + 8 * 184320u);
-  // Present planes are packed in RGB, DEPTH, MASK order from the slot header on.
-  const Geometry depth_mask = ComputeGeometry(320, 180, 8, ChannelBit(kShmChannelDepth) | ChannelBit(kShmChannelMask));
-  EXPECT_EQ(depth_mask.rgb_offset, 0u);
-  EXPECT_EQ(depth_mask.depth_offset, kShmFrameHeaderBytes);
-  EXPECT_EQ(depth_mask.mask_offset, AlignUp(kShmFrameHeaderBytes + kPixels * 4, kShmAlignment));
-  EXPECT_EQ(depth_mask.slot_bytes, AlignUp(depth_mask.mask_offset + kPixels * 2, 4096));
-  const Geometry odd = ComputeGeometry(17, 19, 2, ChannelBit(kShmChannelRgb) | ChannelBit(kShmChannelMask));
-  EXPECT_EQ(odd.mask_offset, AlignUp(kShmFrameHeaderBytes + 17 * 19 * 3, kShmAlignment));
-  EXPECT_EQ(ComputeGeometry(320, 180, 8, kShmAllPixelChannels).slot_bytes, ComputeGeometry(320, 180, 8).slot_bytes);
-  EXPECT_EQ(ChannelFlagValue(kShmAllPixelChannels), "rgb,depth,mask");
-  EXPECT_EQ(ChannelFlagValue(ChannelBit(kShmChannelMask)), "mask");
+  // Present planes are packed in table order from the slot header on.
+  const Geometry depth_mask =
+      ComputeGeometry(320, 180, 8, channels::Bit(proto::CHANNEL_DEPTH) | channels::Bit(proto::CHANNEL_MASK));
+  EXPECT_EQ(depth_mask.offsets[kRgb], 0u);
+  EXPECT_EQ(depth_mask.offsets[kDepth], kShmFrameHeaderBytes);
+  EXPECT_EQ(depth_mask.offsets[kMask], AlignUp(kShmFrameHeaderBytes + kPixels * 4, kShmAlignment));
+  EXPECT_EQ(depth_mask.slot_bytes, AlignUp(depth_mask.offsets[kMask] + kPixels * 2, 4096));
+  const Geometry odd =
+      ComputeGeometry(17, 19, 2, channels::Bit(proto::CHANNEL_RGB) | channels::Bit(proto::CHANNEL_NORMALS));
+  EXPECT_EQ(odd.offsets[kNormals], AlignUp(kShmFrameHeaderBytes + 17 * 19 * 3, kShmAlignment));
+  EXPECT_EQ(odd.slot_bytes, AlignUp(odd.offsets[kNormals] + 17 * 19 * 12, 4096));
+  EXPECT_EQ(channels::Names(kThree), "rgb,depth,mask");
+  EXPECT_EQ(channels::Names(channels::kAllPixels), "rgb,depth,mask,semantic,normals,flow");
 }
 
 TEST(ShmLayout, SocketPathIsAbstractAndBounded) {
@@ -107,7 +114,7 @@ TEST(ShmLayout, DaemonWritesTheDocumentedHeaderAndSealsTheObject) {
   transport::ShmRegion region(Params());
   const ShmHeader& h = region.header();
   EXPECT_EQ(std::string(h.magic, 8), "SIM4CVSM");
-  EXPECT_EQ(h.layout_version, 2u);
+  EXPECT_EQ(h.layout_version, 3u);
   EXPECT_EQ(h.header_bytes, 512u);
   EXPECT_EQ(h.slot_count, 3u);
   EXPECT_EQ(h.camera_width, 40u);
@@ -118,7 +125,7 @@ TEST(ShmLayout, DaemonWritesTheDocumentedHeaderAndSealsTheObject) {
   EXPECT_EQ(h.protocol_version, 1u);
   EXPECT_EQ(h.published, 0u);
   EXPECT_EQ(h.total_bytes, region.geometry().total_bytes);
-  EXPECT_EQ(h.channel_mask, kShmAllPixelChannels);
+  EXPECT_EQ(h.channel_mask, transport::kShmDefaultChannels);
   EXPECT_EQ(fcntl(region.fd(), F_GET_SEALS),
             F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_FUTURE_WRITE | F_SEAL_SEAL);
 
@@ -146,7 +153,7 @@ TEST(ShmLayout, ClientAreaIsSealedAgainstResizingOnly) {
 
 TEST(ShmLayout, RgbOnlyRingIsSmallerAndSaysWhatItCarries) {
   auto params = Params();
-  params.channel_mask = ChannelBit(kShmChannelRgb);
+  params.channel_mask = channels::Bit(proto::CHANNEL_RGB);
   transport::ShmRegion region(params);
   EXPECT_EQ(region.header().channel_mask, 0x02u);
   EXPECT_EQ(region.header().slot_bytes, AlignUp(kShmFrameHeaderBytes + 40 * 30 * 3, 4096));
@@ -172,14 +179,14 @@ void ExpectOpenFramesFails(const transport::ShmRegion& region, std::initializer_
 TEST(ShmLayout, WrongLayoutVersionIsAClearError) {
   transport::ShmRegion region(Params());
   region.header().layout_version = 99;
-  ExpectOpenFramesFails(region, {"layout version 99", "layout version 2"});
+  ExpectOpenFramesFails(region, {"layout version 99", "layout version 3"});
 }
 
 TEST(ShmLayout, InconsistentHeaderIsAClearError) {
   transport::ShmRegion region(Params());
   region.header().channel_mask = 0x1e;  // BOXES is no pixel channel
-  ExpectOpenFramesFails(region, {"channel mask 30", "RGB, DEPTH and MASK"});
-  region.header().channel_mask = kShmAllPixelChannels;
+  ExpectOpenFramesFails(region, {"channel mask 30", "not a set of rgb,depth,mask,semantic,normals,flow"});
+  region.header().channel_mask = channels::kAllPixels;
   region.header().slot_count = 1000;  // slots beyond the object
   ExpectOpenFramesFails(region, {"do not fit"});
 }

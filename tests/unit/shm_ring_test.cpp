@@ -29,7 +29,7 @@ ShmRegionParams Params(const std::string& /*what*/, uint32_t slots) {
   p.camera_name = "uav";
   p.width = kWidth;
   p.height = kHeight;
-  p.slot_count = slots;
+  p.slot_count = slots;  // the default channels: the planes FillFrame holds
   return p;
 }
 
@@ -42,10 +42,10 @@ void FillFrame(session::Frame& f, uint64_t id) {
   f.width = kWidth;
   f.height = kHeight;
   f.render_end_mono_ns = static_cast<int64_t>(id) * 7;
-  f.rgb.resize(pixels * 3);
-  for (std::size_t i = 0; i < f.rgb.size(); ++i) f.rgb[i] = static_cast<uint8_t>(id + i);
-  f.depth.assign(pixels, static_cast<float>(id % 1000000));
-  f.mask.assign(pixels, static_cast<uint16_t>(id));
+  const auto rgb = f.Hold(proto::CHANNEL_RGB);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<uint8_t>(id + i);
+  std::ranges::fill(f.Hold<float>(proto::CHANNEL_DEPTH), static_cast<float>(id % 1000000));
+  std::ranges::fill(f.Hold<uint16_t>(proto::CHANNEL_MASK), static_cast<uint16_t>(id));
   f.boxes.resize(id % 4);
   for (std::size_t b = 0; b < f.boxes.size(); ++b) {
     f.boxes[b] = {static_cast<uint16_t>(b + 1), 1, static_cast<uint32_t>(id), 2, 3, 4, 99, 0.5f};
@@ -61,14 +61,16 @@ std::string Inconsistency(const OwnedFrame& f) {
   const uint64_t id = f.frame_id;
   if (f.sim_time != static_cast<double>(id) * 0.5) return "sim_time";
   if (f.render_end_mono_ns != static_cast<int64_t>(id) * 7) return "render_end_mono_ns";
-  for (std::size_t i = 0; i < f.rgb.size(); ++i) {
-    if (f.rgb[i] != static_cast<uint8_t>(id + i)) return "rgb byte " + std::to_string(i);
+  const auto& rgb = f.planes[*channels::IndexOf(proto::CHANNEL_RGB)];
+  for (std::size_t i = 0; i < rgb.size(); ++i) {
+    if (rgb[i] != static_cast<uint8_t>(id + i)) return "rgb byte " + std::to_string(i);
   }
-  for (float d : f.depth) {
-    if (d != static_cast<float>(id % 1000000)) return "depth";
-  }
-  for (uint16_t m : f.mask) {
-    if (m != static_cast<uint16_t>(id)) return "mask";
+  const auto depth = f.image(proto::CHANNEL_DEPTH);
+  const auto mask = f.image(proto::CHANNEL_MASK);
+  if (!depth || !mask) return "depth or mask missing";
+  for (uint32_t i = 0; i < f.width * f.height; ++i) {
+    if (*depth->at<float>(i, 0) != static_cast<float>(id % 1000000)) return "depth";
+    if (*mask->at<uint16_t>(i, 0) != static_cast<uint16_t>(id)) return "mask";
   }
   if (f.boxes.size() != id % 4) return "box count";
   for (const auto& box : f.boxes) {
@@ -172,7 +174,7 @@ TEST(ShmRing, UnreleasedViewGoesStaleWithoutBlockingTheWriter) {
 // reported absent by every accessor and their records hold zeros, not garbage.
 TEST(ShmRing, RingWithoutSomeChannelsReportsThemAbsent) {
   auto params = Params("channels", 2);
-  params.channel_mask = shm::ChannelBit(shm::kShmChannelRgb);
+  params.channel_mask = channels::Bit(proto::CHANNEL_RGB);
   auto region = std::make_shared<ShmRegion>(params);
   ShmRingWriter writer(region, 0);
   ShmClient client;
@@ -180,16 +182,17 @@ TEST(ShmRing, RingWithoutSomeChannelsReportsThemAbsent) {
   OwnedFrame owned;
   session::Frame frame;
   // A reused OwnedFrame: its depth and mask must not keep an earlier frame's pixels.
-  owned.depth.assign(4, 1.0f);
-  owned.mask.assign(4, 1);
+  owned.planes[*channels::IndexOf(proto::CHANNEL_DEPTH)].assign(16, 1);
+  owned.planes[*channels::IndexOf(proto::CHANNEL_MASK)].assign(8, 1);
   FillFrame(frame, 3);
   writer.Write(frame);
   ASSERT_TRUE(client.ReadNewest(owned));
-  EXPECT_EQ(owned.rgb, frame.rgb);
+  EXPECT_TRUE(std::ranges::equal(owned.planes[*channels::IndexOf(proto::CHANNEL_RGB)], frame.Plane(proto::CHANNEL_RGB)));
   EXPECT_TRUE(owned.has(proto::CHANNEL_RGB));
   EXPECT_FALSE(owned.has(proto::CHANNEL_DEPTH));
   EXPECT_FALSE(owned.has(proto::CHANNEL_MASK));
-  EXPECT_TRUE(owned.depth.empty() && owned.mask.empty());
+  EXPECT_TRUE(owned.planes[*channels::IndexOf(proto::CHANNEL_DEPTH)].empty() &&
+              owned.planes[*channels::IndexOf(proto::CHANNEL_MASK)].empty());
   EXPECT_EQ(owned.boxes.size(), 3u) << "boxes and poses come with any channel set";
   EXPECT_EQ(owned.entities.size(), 1u);
 
@@ -205,11 +208,11 @@ TEST(ShmRing, RingWithoutSomeChannelsReportsThemAbsent) {
       << "channel 0 must not match an absent channel's all-zero record";
   const auto rgb = view.image(proto::CHANNEL_RGB);
   ASSERT_TRUE(rgb.has_value());
-  EXPECT_EQ(std::memcmp(rgb->data, frame.rgb.data(), frame.rgb.size()), 0);
+  EXPECT_EQ(std::memcmp(rgb->data, frame.Pixels(proto::CHANNEL_RGB), frame.Plane(proto::CHANNEL_RGB).size()), 0);
   const shm::ShmFrameHeader& slot = region->map().slot(0);
   EXPECT_EQ(slot.channel_mask, 0x02u);
-  EXPECT_EQ(slot.channel_count, 3u);
-  for (int absent : {1, 2}) {
+  EXPECT_EQ(slot.channel_count, channels::kPixelChannelCount);
+  for (std::size_t absent = 1; absent < channels::kPixelChannelCount; ++absent) {
     const shm::ShmChannel& record = slot.channels[absent];
     EXPECT_TRUE(record.channel == 0 && record.format == 0 && record.stride == 0 && record.offset == 0 &&
                 record.bytes == 0)
@@ -220,7 +223,7 @@ TEST(ShmRing, RingWithoutSomeChannelsReportsThemAbsent) {
 
 TEST(ShmRing, RingWithoutRgbPacksTheOtherPlanes) {
   auto params = Params("no-rgb", 2);
-  params.channel_mask = shm::ChannelBit(shm::kShmChannelDepth) | shm::ChannelBit(shm::kShmChannelMask);
+  params.channel_mask = channels::Bit(proto::CHANNEL_DEPTH) | channels::Bit(proto::CHANNEL_MASK);
   auto region = std::make_shared<ShmRegion>(params);
   ShmRingWriter writer(region, 0);
   ShmClient client;
@@ -230,9 +233,9 @@ TEST(ShmRing, RingWithoutRgbPacksTheOtherPlanes) {
   writer.Write(frame);
   OwnedFrame owned;
   ASSERT_TRUE(client.ReadNewest(owned));
-  EXPECT_TRUE(owned.rgb.empty());
-  EXPECT_EQ(owned.depth, frame.depth);
-  EXPECT_EQ(owned.mask, frame.mask);
+  EXPECT_TRUE(owned.planes[*channels::IndexOf(proto::CHANNEL_RGB)].empty());
+  EXPECT_TRUE(std::ranges::equal(owned.planes[*channels::IndexOf(proto::CHANNEL_DEPTH)], frame.Plane(proto::CHANNEL_DEPTH)));
+  EXPECT_TRUE(std::ranges::equal(owned.planes[*channels::IndexOf(proto::CHANNEL_MASK)], frame.Plane(proto::CHANNEL_MASK)));
   FrameView view;
   ASSERT_TRUE(client.AcquireNewest(view));
   EXPECT_FALSE(view.image(proto::CHANNEL_RGB).has_value());

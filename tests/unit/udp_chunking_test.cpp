@@ -41,12 +41,12 @@ void FillFrame(session::Frame& f, uint64_t frame_id, uint32_t width, uint32_t he
   f.width = width;
   f.height = height;
   f.render_end_mono_ns = 123456789;
-  f.rgb.resize(pixels * 3);
-  for (std::size_t i = 0; i < f.rgb.size(); ++i) f.rgb[i] = static_cast<uint8_t>(i * 7 + frame_id);
-  f.depth.resize(pixels);
-  for (std::size_t i = 0; i < pixels; ++i) f.depth[i] = 0.25f * static_cast<float>(i);
-  f.mask.resize(pixels);
-  for (std::size_t i = 0; i < pixels; ++i) f.mask[i] = static_cast<uint16_t>(i * 31);
+  const auto rgb = f.Hold(proto::CHANNEL_RGB);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<uint8_t>(i * 7 + frame_id);
+  const auto depth = f.Hold<float>(proto::CHANNEL_DEPTH);
+  for (std::size_t i = 0; i < pixels; ++i) depth[i] = 0.25f * static_cast<float>(i);
+  const auto mask = f.Hold<uint16_t>(proto::CHANNEL_MASK);
+  for (std::size_t i = 0; i < pixels; ++i) mask[i] = static_cast<uint16_t>(i * 31);
   render::GroundTruthBox car;
   car.instance = 1;
   car.object_class = proto::OBJECT_CLASS_CAR;

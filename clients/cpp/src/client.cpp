@@ -41,8 +41,13 @@ std::optional<ImageView> FindImage(const proto::Frame& frame, proto::Channel cha
                             " carries " + std::to_string(image.data().size()) + " bytes, fewer than stride " +
                             std::to_string(image.stride()) + " x height " + std::to_string(frame.height()));
     }
-    return ImageView{reinterpret_cast<const uint8_t*>(image.data().data()), frame.width(), frame.height(),
-                     image.stride(), image.format()};
+    return ImageView{reinterpret_cast<const uint8_t*>(image.data().data()),
+                     frame.width(),
+                     frame.height(),
+                     image.stride(),
+                     image.format(),
+                     image.element(),
+                     image.components()};
   }
   return std::nullopt;
 }

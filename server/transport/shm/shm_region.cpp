@@ -21,7 +21,7 @@ namespace {
 void CheckParams(const ShmRegionParams& p) {
   if (p.slot_count < 2)
     throw std::invalid_argument("--shm-slots " + std::to_string(p.slot_count) + " must be at least 2");
-  if (p.channel_mask == 0 || (p.channel_mask & ~shm::kShmAllPixelChannels) != 0) {
+  if (p.channel_mask == 0 || (p.channel_mask & ~channels::kAllPixels) != 0) {
     throw std::invalid_argument("--shm-channels must name one or more of rgb, depth and mask (channel mask " +
                                 std::to_string(p.channel_mask) + ")");
   }

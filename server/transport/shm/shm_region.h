@@ -15,13 +15,18 @@
 
 namespace sim4cv::transport {
 
+// The ring's channels unless --shm-channels says otherwise: what a tracker or
+// detector reads. All six would make each slot 3.3x larger.
+inline constexpr channels::ChannelSet kShmDefaultChannels =
+    channels::Bit(proto::CHANNEL_RGB) | channels::Bit(proto::CHANNEL_DEPTH) | channels::Bit(proto::CHANNEL_MASK);
+
 struct ShmRegionParams {
   std::string camera_name;
   uint32_t width = 0, height = 0;
   uint32_t slot_count = 8;
   uint32_t expiry_ms = 5000;
   // Bit (1 << proto::Channel) per pixel channel the slots carry (--shm-channels).
-  uint32_t channel_mask = shm::kShmAllPixelChannels;
+  channels::ChannelSet channel_mask = kShmDefaultChannels;
 };
 
 class ShmRegion {

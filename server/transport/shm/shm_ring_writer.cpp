@@ -7,36 +7,20 @@
 namespace sim4cv::transport {
 namespace {
 
-// One pixel plane of a frame as the ring stores it: where it comes from and
-// where it goes in a slot (offset 0: the ring does not carry the channel).
-struct Plane {
-  proto::Channel channel;
-  proto::PixelFormat format;
-  uint32_t bytes_per_pixel;
-  const void* data;
-  std::size_t available_bytes;  // in the frame's buffer
-  uint64_t offset;              // in the slot
-};
-
-// The frame's planes in channel-record order (RGB, DEPTH, MASK).
-std::array<Plane, 3> Planes(const session::Frame& f, const shm::Geometry& g) {
-  return {{{proto::CHANNEL_RGB, proto::PIXEL_FORMAT_RGB8, 3, f.rgb.data(), f.rgb.size(), g.rgb_offset},
-           {proto::CHANNEL_DEPTH, proto::PIXEL_FORMAT_DEPTH_F32, 4, f.depth.data(), f.depth.size() * sizeof(float),
-            g.depth_offset},
-           {proto::CHANNEL_MASK, proto::PIXEL_FORMAT_INSTANCE_U16, 2, f.mask.data(), f.mask.size() * sizeof(uint16_t),
-            g.mask_offset}}};
-}
-
-// The record of a plane the ring carries; one it does not carry stays all
-// zero (docs/protocol.md 13.2), so no reader can follow it anywhere.
-void SetChannel(shm::ShmChannel& out, const Plane& plane, uint32_t width, uint32_t height) {
+// The record of plane `index` in a slot of the given geometry; a plane the
+// ring does not carry stays all zero (docs/protocol.md 13.2), so no reader
+// can follow it anywhere.
+void SetChannel(shm::ShmChannel& out, std::size_t index, const shm::Geometry& g, uint32_t width, uint32_t height) {
   out = {};
-  if (plane.offset == 0) return;
-  out.channel = plane.channel;
-  out.format = plane.format;
-  out.bytes_per_pixel = plane.bytes_per_pixel;
-  out.stride = width * plane.bytes_per_pixel;
-  out.offset = plane.offset;
+  if (g.offsets[index] == 0) return;
+  const channels::ChannelInfo& info = channels::kPixelChannels[index];
+  out.channel = static_cast<uint32_t>(info.id);
+  out.format = static_cast<uint32_t>(info.format);
+  out.bytes_per_pixel = static_cast<uint16_t>(info.bytes_per_pixel);
+  out.element = static_cast<uint8_t>(info.element);
+  out.components = static_cast<uint8_t>(info.components);
+  out.stride = width * info.bytes_per_pixel;
+  out.offset = g.offsets[index];
   out.bytes = static_cast<uint64_t>(out.stride) * height;
 }
 
@@ -76,9 +60,13 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   const ShmRegionParams& params = region.params();
   const std::size_t pixels = static_cast<std::size_t>(params.width) * params.height;
   if (frame.camera_index != camera_index_ || frame.width != params.width || frame.height != params.height) return;
-  const std::array<Plane, 3> planes = Planes(frame, region.geometry());
-  for (const Plane& plane : planes) {
-    if (plane.offset != 0 && plane.available_bytes < pixels * plane.bytes_per_pixel) return;
+  const shm::Geometry& geometry = region.geometry();
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    const channels::ChannelInfo& info = channels::kPixelChannels[i];
+    if (geometry.offsets[i] != 0 &&
+        (!channels::Has(frame.channels, info.id) || frame.planes[i].size() < pixels * info.bytes_per_pixel)) {
+      return;
+    }
   }
   // Every address comes from the daemon's own geometry; nothing is read back from the object.
   const shm::FrameMap& map = region.map();
@@ -101,13 +89,13 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   h.width = frame.width;
   h.height = frame.height;
   h.camera_index = frame.camera_index;
-  h.channel_count = static_cast<uint32_t>(planes.size());
+  h.channel_count = static_cast<uint32_t>(channels::kPixelChannelCount);
   h.channel_mask = params.channel_mask;
   // Only the channels the ring carries are copied: this memcpy is most of the
   // ring's latency, and a tracker that reads RGB alone needs a third of it.
-  for (std::size_t i = 0; i < planes.size(); ++i) {
-    SetChannel(h.channels[i], planes[i], frame.width, frame.height);
-    if (planes[i].offset != 0) std::memcpy(slot + planes[i].offset, planes[i].data, h.channels[i].bytes);
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    SetChannel(h.channels[i], i, geometry, frame.width, frame.height);
+    if (geometry.offsets[i] != 0) std::memcpy(slot + geometry.offsets[i], frame.planes[i].data(), h.channels[i].bytes);
   }
 
   const std::size_t boxes = std::min<std::size_t>(frame.boxes.size(), shm::kShmMaxBoxes);

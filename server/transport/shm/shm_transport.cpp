@@ -105,7 +105,8 @@ class ShmTransport : public Transport {
     // The ring's own newest-frame subscription: the camera renders every frame.
     writer_id_ = session::NewClientId();
     context.commands.Post(
-        {writer_id_, session::SubscribeCommand{static_cast<uint32_t>(camera), proto::DELIVERY_NEWEST, writer_}});
+        {writer_id_, session::SubscribeCommand{static_cast<uint32_t>(camera), proto::DELIVERY_NEWEST,
+                                               options_.channel_mask, writer_}});
     thread_ = std::thread([this] { Run(); });
   }
 
@@ -350,13 +351,12 @@ class ShmTransport : public Transport {
              "' here, or use TCP for other cameras";
     }
     for (const int channel : subscribe.channels()) {
-      const bool pixels = channel >= proto::CHANNEL_RGB && channel <= proto::CHANNEL_MASK;
-      if (!pixels || (options_.channel_mask & shm::ChannelBit(static_cast<uint32_t>(channel))) != 0) continue;
+      const channels::ChannelInfo* info = channels::Find(channel);
+      if (info == nullptr || channels::Has(options_.channel_mask, channel)) continue;  // BOXES, unknown: ClientProtocol's
       return "Subscribe.channels asks for " + proto::Channel_Name(channel) + " but the shared-memory ring " +
-             options_.name + " carries only " + shm::ChannelFlagValue(options_.channel_mask) +
+             options_.name + " carries only " + channels::Names(options_.channel_mask) +
              " (daemon flag --shm-channels); leave " + proto::Channel_Name(channel) +
-             " out, subscribe to it over TCP, or start sim4cvd with --shm-channels including " +
-             shm::ChannelFlagName(static_cast<uint32_t>(channel));
+             " out, subscribe to it over TCP, or start sim4cvd with --shm-channels including " + std::string(info->name);
     }
     return "";
   }

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "protocol/shm_layout.h"
+#include "server/transport/shm/shm_region.h"
 #include "server/common/limits.h"
 #include "server/transport/transport.h"
 
@@ -24,7 +25,7 @@ struct ShmOptions {
   uint32_t max_clients = limits::kShmMaxClients;  // shared-memory clients attached at once
   // Bit (1 << proto::Channel) per pixel channel the slots carry (--shm-channels): a
   // ring without the channels its readers skip copies and holds less per frame.
-  uint32_t channel_mask = shm::kShmAllPixelChannels;
+  channels::ChannelSet channel_mask = kShmDefaultChannels;
 };
 
 // Creates the frame object and listens at once; serves after Start; closes

@@ -26,7 +26,7 @@ class FrameChunker {
   // Largest datagram a UDP/IPv4 socket can send.
   static constexpr std::size_t kMaxDatagramBytes = 65507;
   // Most segments FrameEncoder produces (its segment array's size).
-  static constexpr std::size_t kMaxSegments = 8;
+  static constexpr std::size_t kMaxSegments = 2 * channels::kPixelChannelCount + 1;
   // iovecs one chunk needs at most: its header plus a slice of every segment.
   static constexpr std::size_t kMaxIovecs = 1 + kMaxSegments;
 

@@ -47,13 +47,21 @@ class ConnectionError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// A non-owning view of one channel's pixels inside a received Frame.
+// A non-owning view of one channel's pixels inside a received Frame: rows of
+// `stride` bytes, each pixel `components` values of type `element`.
 struct ImageView {
   const uint8_t* data = nullptr;
   uint32_t width = 0;
   uint32_t height = 0;
   uint32_t stride = 0;
   proto::PixelFormat format = proto::PIXEL_FORMAT_UNSPECIFIED;
+  proto::ElementType element = proto::ELEMENT_TYPE_UNSPECIFIED;
+  uint32_t components = 0;
+  // Pixel (x, y) as T (float for DEPTH/NORMALS/FLOW, uint16_t for MASK, uint8_t else).
+  template <typename T>
+  const T* at(uint32_t x, uint32_t y) const {
+    return reinterpret_cast<const T*>(data + static_cast<std::size_t>(y) * stride) + static_cast<std::size_t>(x) * components;
+  }
 };
 
 // The channel's pixels in `frame`, or nullopt if the frame does not carry it.

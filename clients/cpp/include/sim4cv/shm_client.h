@@ -96,12 +96,13 @@ struct OwnedFrame {
   int64_t render_end_mono_ns = 0;
   uint32_t width = 0, height = 0;
   // The pixel channels the ring carries (bit 1 << proto::Channel); the
-  // vector of a channel it does not carry is empty.
+  // plane of a channel it does not carry is empty.
   uint32_t channel_mask = 0;
-  std::vector<uint8_t> rgb;    // height * width * 3
-  std::vector<float> depth;    // height * width
-  std::vector<uint16_t> mask;  // height * width
+  // Plane i: channel channels::kPixelChannels[i], height * width pixels.
+  std::array<std::vector<uint8_t>, channels::kPixelChannelCount> planes;
   bool has(proto::Channel channel) const;
+  // A view of the copied pixels; nullopt if !has(channel).
+  std::optional<ImageView> image(proto::Channel channel) const;
   std::vector<ShmBox> boxes;
   uint32_t box_total = 0;
   std::vector<ShmEntityPose> entities;

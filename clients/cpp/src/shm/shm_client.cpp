@@ -42,8 +42,7 @@ std::string Printable(const char* bytes, std::size_t size) {
 uint32_t RingChannels(const shm::ShmHeader& h) { return h.channel_mask; }
 
 bool InMask(uint32_t mask, proto::Channel channel) {
-  return channel >= proto::CHANNEL_RGB && channel <= proto::CHANNEL_MASK &&
-         (mask & shm::ChannelBit(static_cast<uint32_t>(channel))) != 0;
+  return channels::Find(channel) != nullptr && channels::Has(mask, channel);
 }
 
 // The frame object's header against this client's layout and the object's
@@ -66,8 +65,8 @@ shm::Geometry CheckFrames(const shm::ShmHeader& h, std::size_t mapped, const std
   if (h.camera_width == 0 || h.camera_height == 0 || h.camera_width > 65536 || h.camera_height > 65536) {
     fail("camera size " + std::to_string(h.camera_width) + "x" + std::to_string(h.camera_height) + " is out of range");
   }
-  if (h.channel_mask == 0 || (h.channel_mask & ~shm::kShmAllPixelChannels) != 0) {
-    fail("its channel mask " + std::to_string(h.channel_mask) + " is not a set of RGB, DEPTH and MASK");
+  if (h.channel_mask == 0 || (h.channel_mask & ~channels::kAllPixels) != 0) {
+    fail("its channel mask " + std::to_string(h.channel_mask) + " is not a set of " + channels::Names(channels::kAllPixels));
   }
   const shm::Geometry g = shm::ComputeGeometry(h.camera_width, h.camera_height, h.slot_count, h.channel_mask);
   if (h.slot_count < 2 || h.slot_bytes != g.slot_bytes || h.slots_offset != g.slots_offset ||
@@ -132,23 +131,24 @@ void ReceiveAttach(int socket, shm::ShmAttach& attach, int (&fds)[3], int& fd_co
   if (fd_count != 3) fail("expected 3 descriptors, got " + std::to_string(fd_count));
 }
 
-// Copies channel record `index` (0 RGB, 1 DEPTH, 2 MASK) of `meta`, `count`
-// values, into `out`; empties `out` if the frame lacks the channel. False if
-// the record does not fit in the slot (sizes come from a possibly torn header).
-template <typename T>
-bool CopyPlane(std::vector<T>& out, const uint8_t* slot, uint64_t slot_bytes, const shm::ShmFrameHeader& meta,
-               uint32_t index, std::size_t count) {
-  const uint32_t channel = index + 1;
-  if ((meta.channel_mask & shm::ChannelBit(channel)) == 0) {
+// Copies plane `index` (of channels::kPixelChannels) of `meta`, `pixels`
+// pixels, into `out`; empties `out` if the frame lacks the channel. False if
+// the record does not fit in the slot or disagrees with the channel table
+// (sizes come from a possibly torn header).
+bool CopyPlane(std::vector<uint8_t>& out, const uint8_t* slot, uint64_t slot_bytes, const shm::ShmFrameHeader& meta,
+               std::size_t index, std::size_t pixels) {
+  const channels::ChannelInfo& info = channels::kPixelChannels[index];
+  if (!channels::Has(meta.channel_mask, info.id)) {
     out.clear();  // keeps the capacity: a reused OwnedFrame allocates nothing
     return true;
   }
   const shm::ShmChannel& record = meta.channels[index];
-  const uint64_t bytes = count * sizeof(T);
-  if (record.channel != channel || record.offset < shm::kShmFrameHeaderBytes || record.offset + bytes > slot_bytes) {
+  const uint64_t bytes = pixels * info.bytes_per_pixel;
+  if (record.channel != static_cast<uint32_t>(info.id) || record.bytes_per_pixel != info.bytes_per_pixel ||
+      record.offset < shm::kShmFrameHeaderBytes || record.offset + bytes > slot_bytes) {
     return false;
   }
-  out.resize(count);
+  out.resize(bytes);
   std::memcpy(out.data(), slot + record.offset, std::min<uint64_t>(record.bytes, bytes));
   return true;
 }
@@ -159,13 +159,27 @@ bool FrameView::has(proto::Channel channel) const { return slot_ && InMask(heade
 
 bool OwnedFrame::has(proto::Channel channel) const { return InMask(channel_mask, channel); }
 
+std::optional<ImageView> OwnedFrame::image(proto::Channel channel) const {
+  const auto index = channels::IndexOf(channel);
+  if (!index || !has(channel)) return std::nullopt;
+  const channels::ChannelInfo& info = channels::kPixelChannels[*index];
+  if (planes[*index].size() < static_cast<std::size_t>(width) * height * info.bytes_per_pixel) return std::nullopt;
+  return ImageView{planes[*index].data(), width, height, width * info.bytes_per_pixel, info.format, info.element,
+                   info.components};
+}
+
 std::optional<ImageView> FrameView::image(proto::Channel channel) const {
   if (!has(channel)) return std::nullopt;  // an absent channel's record is zero: nothing to point at
   for (uint32_t i = 0; i < std::min(header_.channel_count, shm::kShmMaxChannels); ++i) {
     const shm::ShmChannel& c = header_.channels[i];
     if (c.channel != static_cast<uint32_t>(channel)) continue;
-    return ImageView{slot_ + c.offset, header_.width, header_.height, c.stride,
-                     static_cast<proto::PixelFormat>(c.format)};
+    return ImageView{slot_ + c.offset,
+                     header_.width,
+                     header_.height,
+                     c.stride,
+                     static_cast<proto::PixelFormat>(c.format),
+                     static_cast<proto::ElementType>(c.element),
+                     c.components};
   }
   return std::nullopt;
 }
@@ -359,9 +373,10 @@ bool ShmClient::CopyNewest(OwnedFrame& out) const {
     // Sizes come from a possibly torn header: bound them by the slot before copying.
     const std::size_t pixels =
         static_cast<std::size_t>(std::min(meta.width, h.camera_width)) * std::min(meta.height, h.camera_height);
-    const bool sane = meta.channel_count == 3 && CopyPlane(out.rgb, slot, geometry_.slot_bytes, meta, 0, pixels * 3) &&
-                      CopyPlane(out.depth, slot, geometry_.slot_bytes, meta, 1, pixels) &&
-                      CopyPlane(out.mask, slot, geometry_.slot_bytes, meta, 2, pixels);
+    bool sane = meta.channel_count == channels::kPixelChannelCount;
+    for (std::size_t i = 0; sane && i < channels::kPixelChannelCount; ++i) {
+      sane = CopyPlane(out.planes[i], slot, geometry_.slot_bytes, meta, i, pixels);
+    }
     std::atomic_thread_fence(std::memory_order_acquire);
     if (shm::Atomic(frame.sequence).load(std::memory_order_relaxed) != before) continue;
     if (!sane)

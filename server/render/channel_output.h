@@ -1,0 +1,36 @@
+// How the renderer produces one pixel channel: its render target, how it is
+// cleared and read back, and the GLSL that writes it. One file per channel in
+// channels/ defines one of these; channel_outputs.cpp lists them in the
+// order of protocol/channels.h, which says what the channel is on the wire.
+#pragma once
+
+#define GL_GLEXT_PROTOTYPES
+#include <GL/gl.h>
+#include <GL/glext.h>
+
+#include <array>
+#include <cstdint>
+
+#include "protocol/channels.h"
+
+namespace sim4cv::render {
+
+struct ChannelOutput {
+  proto::Channel channel;
+  GLenum target_format;           // renderbuffer internal format
+  GLenum read_format, read_type;  // glReadPixels into the channel's wire layout
+  bool integer;                   // an integer target (cleared with glClearBufferuiv)
+  std::array<GLfloat, 4> clear_float;   // where nothing is drawn, for float targets
+  std::array<GLuint, 4> clear_integer;  // ... and for integer targets
+  const char* glsl_type;          // the fragment output's type, e.g. "vec2"
+  // Statements that assign OUT from the inputs every channel may read
+  // (renderer.cpp, kFragmentInputs): v_color, v_world_normal,
+  // v_camera_normal, v_depth, v_semantic, v_previous_clip, u_instance,
+  // u_to_light, u_viewport.
+  const char* glsl_body;
+};
+
+// One per entry of channels::kPixelChannels, in that order.
+extern const std::array<const ChannelOutput*, channels::kPixelChannelCount> kChannelOutputs;
+
+}  // namespace sim4cv::render

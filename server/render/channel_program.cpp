@@ -1,0 +1,84 @@
+#include "server/render/channel_program.h"
+
+#include <string>
+
+#include "server/render/gl_program.h"
+
+namespace sim4cv::render {
+namespace {
+
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec3 a_color;
+layout(location = 3) in uint a_semantic;
+uniform mat4 u_model;
+uniform mat4 u_view;
+uniform mat4 u_projection;
+uniform mat3 u_normal_matrix;
+uniform mat4 u_previous_model;
+uniform mat4 u_previous_view_projection;
+out vec3 v_world_normal;
+out vec3 v_camera_normal;
+out vec3 v_color;
+out float v_depth;
+flat out uint v_semantic;
+out vec4 v_previous_clip;
+void main() {
+  vec4 camera_position = u_view * (u_model * vec4(a_position, 1.0));
+  v_depth = -camera_position.z;  // camera-space z is affine over a triangle, so interpolation is exact
+  v_world_normal = u_normal_matrix * a_normal;
+  v_camera_normal = mat3(u_view) * v_world_normal;  // the view is rigid: its 3x3 part rotates
+  v_color = a_color;
+  v_semantic = a_semantic;
+  v_previous_clip = u_previous_view_projection * (u_previous_model * vec4(a_position, 1.0));
+  gl_Position = u_projection * camera_position;
+}
+)";
+
+// What every channel's glsl_body may read (channel_output.h).
+constexpr const char* kFragmentInputs = R"(#version 330 core
+in vec3 v_world_normal;
+in vec3 v_camera_normal;
+in vec3 v_color;
+in float v_depth;
+flat in uint v_semantic;
+in vec4 v_previous_clip;
+uniform uint u_instance;
+uniform vec3 u_to_light;
+uniform vec2 u_viewport;
+)";
+
+std::string FragmentShader(PlaneSet planes) {
+  std::string declarations = kFragmentInputs;
+  std::string body = "void main() {\n";
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    if ((planes & (1u << i)) == 0) continue;
+    const ChannelOutput& output = *kChannelOutputs[i];
+    const std::string name = "out_" + std::string(channels::kPixelChannels[i].name);
+    declarations += "layout(location = " + std::to_string(i) + ") out " + output.glsl_type + " " + name + ";\n";
+    body += "#define OUT " + name + "\n  {" + output.glsl_body + "  }\n#undef OUT\n";
+  }
+  return declarations + body + "}\n";
+}
+
+}  // namespace
+
+ChannelProgram::ChannelProgram(PlaneSet planes) : planes_(planes) {
+  const std::string fragment = FragmentShader(planes);
+  program_ = LinkProgram(kVertexShader, fragment.c_str());
+  const auto locate = [&](const char* name) { return glGetUniformLocation(program_, name); };
+  u_model = locate("u_model");
+  u_view = locate("u_view");
+  u_projection = locate("u_projection");
+  u_normal_matrix = locate("u_normal_matrix");
+  u_instance = locate("u_instance");
+  u_to_light = locate("u_to_light");
+  u_previous_model = locate("u_previous_model");
+  u_previous_view_projection = locate("u_previous_view_projection");
+  u_viewport = locate("u_viewport");
+}
+
+ChannelProgram::~ChannelProgram() { glDeleteProgram(program_); }
+
+}  // namespace sim4cv::render

@@ -1,0 +1,37 @@
+// The GL program that draws one set of pixel channels in one pass (multiple
+// render targets): a shared vertex shader and a fragment shader composed from
+// the ChannelOutput of each channel in the set, output i going to colour
+// attachment i. Channels nobody asked for are not in the shader, so they cost
+// no fragment work. Needs a current GL context.
+#pragma once
+
+#include <cstdint>
+
+#include "server/render/channel_output.h"
+
+namespace sim4cv::render {
+
+// Bit i: plane i of channels::kPixelChannels.
+using PlaneSet = uint32_t;
+
+class ChannelProgram {
+ public:
+  explicit ChannelProgram(PlaneSet planes);
+  ~ChannelProgram();
+  ChannelProgram(const ChannelProgram&) = delete;
+  ChannelProgram& operator=(const ChannelProgram&) = delete;
+
+  GLuint id() const { return program_; }
+  PlaneSet planes() const { return planes_; }
+
+  // Uniform locations; -1 where the linker found the uniform unused for this
+  // set (glUniform* ignores -1).
+  GLint u_model = -1, u_view = -1, u_projection = -1, u_normal_matrix = -1, u_instance = -1, u_to_light = -1;
+  GLint u_previous_model = -1, u_previous_view_projection = -1, u_viewport = -1;
+
+ private:
+  PlaneSet planes_ = 0;
+  GLuint program_ = 0;
+};
+
+}  // namespace sim4cv::render
