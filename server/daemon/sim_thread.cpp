@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <future>
 
 #include "server/common/limits.h"
@@ -363,10 +364,23 @@ void SimThread::RenderCamera(uint32_t camera_index, channels::ChannelSet wanted)
   frame->width = spec.width;
   frame->height = spec.height;
   frame->channels = 0;
+  // A subscriber that takes pixels in place (the shm ring) gets them read
+  // back straight into its memory: nothing is copied after rendering. Only
+  // channels other subscribers want too land in the frame as well.
+  session::PixelTargets in_place{};
+  channels::ChannelSet others = wanted;
+  bool prepared = false;
+  scheduler_.ForEachLink(camera_index, [&](session::ClientLink& link) {
+    if (!prepared && link.PrepareTargets(camera_index, spec.width, spec.height, in_place)) {
+      prepared = true;
+      others = scheduler_.ChannelsWanted(camera_index, &link);
+    }
+  });
   render::FrameBuffers buffers{};
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     const proto::Channel channel = channels::kPixelChannels[i].id;
-    if (channels::Has(wanted, channel)) buffers[i] = frame->Hold(channel).data();
+    if (!channels::Has(wanted, channel)) continue;
+    buffers[i] = in_place[i] != nullptr ? in_place[i] : frame->Hold(channel).data();
   }
 
   auto& labelled = graphics_->labelled_objects();
@@ -375,6 +389,13 @@ void SimThread::RenderCamera(uint32_t camera_index, channels::ChannelSet wanted)
   view.previous_world_from_camera = previous_views_.Of(camera_index, spec, view);
   renderer_->Render(view, graphics_->draw_items(), buffers,
                     boxes ? std::span<uint32_t>(unoccluded_pixels_) : std::span<uint32_t>());
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    const proto::Channel channel = channels::kPixelChannels[i].id;
+    if (in_place[i] != nullptr && buffers[i] == in_place[i] && channels::Has(others, channel)) {
+      const std::span<uint8_t> plane = frame->Hold(channel);  // another transport sends it too
+      std::memcpy(plane.data(), in_place[i], plane.size());
+    }
+  }
   frame->boxes.clear();
   frame->objects.clear();
   const render::BoxProjector camera(view);
@@ -382,7 +403,7 @@ void SimThread::RenderCamera(uint32_t camera_index, channels::ChannelSet wanted)
   frame->camera_pose = render::OpenCvPoseOf(view);
   if (boxes) {
     for (auto& object : labelled) object.unoccluded_pixels = unoccluded_pixels_[object.instance];
-    const auto* mask = reinterpret_cast<const uint16_t*>(frame->Pixels(proto::CHANNEL_MASK));
+    const auto* mask = reinterpret_cast<const uint16_t*>(buffers[*channels::IndexOf(proto::CHANNEL_MASK)]);
     boxes_.Extract(mask, spec.width, spec.height, labelled, frame->boxes);
     // 3D ground truth from the very view that was rendered, so it matches the pixels.
     graphics_->catalog().Fill(graphics_->moving_objects(), camera, frame->boxes, frame->objects);

@@ -24,6 +24,16 @@ class ClientLink {
   // A client that is already gone drops it. May allocate (configuration is
   // rare); the frame path must not.
   virtual void OfferReply(proto::Envelope reply) = 0;
+
+  // Sim thread, before it renders a frame of `camera_index` at width x
+  // height: a subscriber that can take pixels straight from the renderer
+  // (the shared-memory ring) points `targets` at where the channels it
+  // carries go and returns true; the next frame it is offered publishes them
+  // without copying. Others keep this default.
+  virtual bool PrepareTargets(uint32_t /*camera_index*/, uint32_t /*width*/, uint32_t /*height*/,
+                              PixelTargets& /*targets*/) {
+    return false;
+  }
 };
 
 }  // namespace sim4cv::session

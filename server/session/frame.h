@@ -64,6 +64,10 @@ struct Frame {
   proto::State state;  // entity poses at this frame (reused message)
 };
 
+// Where the renderer may write a frame's planes in place, one pointer per
+// entry of channels::kPixelChannels (null: not there).
+using PixelTargets = std::array<uint8_t*, channels::kPixelChannelCount>;
+
 using FramePool = RefPool<Frame>;
 using FrameRef = PoolRef<Frame>;
 

@@ -50,12 +50,13 @@ void Scheduler::ConsumeSteps() {
   }
 }
 
-channels::ChannelSet Scheduler::ChannelsWanted(uint32_t camera_index) const {
+channels::ChannelSet Scheduler::ChannelsWanted(uint32_t camera_index, const ClientLink* except) const {
   if (Dead(camera_index)) return 0;
   channels::ChannelSet wanted = 0;
   for (const auto& s : subscriptions_) {
+    if (s.camera_index != camera_index || (except != nullptr && s.link.get() == except)) continue;
     // A subscription always wants something: a frame without pixels still carries its metadata.
-    if (s.camera_index == camera_index) wanted |= s.channels | channels::Bit(proto::CHANNEL_UNSPECIFIED);
+    wanted |= s.channels | channels::Bit(proto::CHANNEL_UNSPECIFIED);
   }
   return wanted;
 }

@@ -36,7 +36,15 @@ class Scheduler {
   bool CameraWanted(uint32_t camera_index) const { return ChannelsWanted(camera_index) != 0; }
   // What the camera's frames must hold: the union of its live subscribers'
   // channels (0: none, nothing to render).
-  channels::ChannelSet ChannelsWanted(uint32_t camera_index) const;
+  channels::ChannelSet ChannelsWanted(uint32_t camera_index, const ClientLink* except = nullptr) const;
+  // The camera's subscribers, for the sim thread to ask which can take
+  // pixels in place (ClientLink::PrepareTargets).
+  template <typename Visit>
+  void ForEachLink(uint32_t camera_index, Visit&& visit) const {
+    for (const auto& s : subscriptions_) {
+      if (s.camera_index == camera_index && s.link) visit(*s.link);
+    }
+  }
   // The camera `client` is subscribed to, if any.
   std::optional<uint32_t> CameraOf(ClientId client) const;
   // Hands `frame` to every subscriber of its camera, in client-id order; with

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <utility>
 
 namespace sim4cv::transport {
 namespace {
@@ -55,13 +56,36 @@ ShmRingWriter::ShmRingWriter(std::shared_ptr<ShmRegion> region, uint32_t camera_
 
 void ShmRingWriter::OfferFrame(const session::FrameRef& frame) { Write(*frame); }
 
+// The seqlock: odd while the slot changes, so readers discard what they copy
+// meanwhile. The value comes from the publication, not from the slot.
+void ShmRingWriter::OpenSlot(uint64_t publication) {
+  shm::ShmFrameHeader& h = region_->map().slot(publication - 1);  // FrameMap takes it modulo slot_count
+  shm::Atomic(h.sequence).store(2 * publication + 1, std::memory_order_relaxed);
+  std::atomic_thread_fence(std::memory_order_release);
+}
+
+bool ShmRingWriter::PrepareTargets(uint32_t camera_index, uint32_t width, uint32_t height,
+                                   session::PixelTargets& targets) {
+  const ShmRegionParams& params = region_->params();
+  if (camera_index != camera_index_ || width != params.width || height != params.height) return false;
+  OpenSlot(published_ + 1);
+  uint8_t* slot = region_->map().slot_bytes(published_);
+  const shm::Geometry& geometry = region_->geometry();
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    targets[i] = geometry.offsets[i] != 0 ? slot + geometry.offsets[i] : nullptr;
+  }
+  prepared_ = true;
+  return true;
+}
+
 void ShmRingWriter::Write(const session::Frame& frame) {
   const ShmRegion& region = *region_;
   const ShmRegionParams& params = region.params();
   const std::size_t pixels = static_cast<std::size_t>(params.width) * params.height;
   if (frame.camera_index != camera_index_ || frame.width != params.width || frame.height != params.height) return;
   const shm::Geometry& geometry = region.geometry();
-  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+  const bool in_place = std::exchange(prepared_, false);
+  for (std::size_t i = 0; i < channels::kPixelChannelCount && !in_place; ++i) {
     const channels::ChannelInfo& info = channels::kPixelChannels[i];
     if (geometry.offsets[i] != 0 &&
         (!channels::Has(frame.channels, info.id) || frame.planes[i].size() < pixels * info.bytes_per_pixel)) {
@@ -75,12 +99,8 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   const uint64_t slot_index = publication - 1;  // FrameMap takes it modulo slot_count
   uint8_t* slot = map.slot_bytes(slot_index);
   shm::ShmFrameHeader& h = map.slot(slot_index);
-
-  // Seqlock: odd while the slot changes, so readers discard what they copy
-  // meanwhile. The value comes from the publication, not from the slot.
+  if (!in_place) OpenSlot(publication);
   auto sequence = shm::Atomic(h.sequence);
-  sequence.store(2 * publication + 1, std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_release);
 
   h.publication = publication;
   h.frame_id = frame.frame_id;
@@ -91,11 +111,13 @@ void ShmRingWriter::Write(const session::Frame& frame) {
   h.camera_index = frame.camera_index;
   h.channel_count = static_cast<uint32_t>(channels::kPixelChannelCount);
   h.channel_mask = params.channel_mask;
-  // Only the channels the ring carries are copied: this memcpy is most of the
-  // ring's latency, and a tracker that reads RGB alone needs a third of it.
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     SetChannel(h.channels[i], i, geometry, frame.width, frame.height);
-    if (geometry.offsets[i] != 0) std::memcpy(slot + geometry.offsets[i], frame.planes[i].data(), h.channels[i].bytes);
+    // Rendered in place, the pixels are there already; otherwise only the
+    // channels the ring carries are copied (this memcpy was most of the ring's latency).
+    if (!in_place && geometry.offsets[i] != 0) {
+      std::memcpy(slot + geometry.offsets[i], frame.planes[i].data(), h.channels[i].bytes);
+    }
   }
 
   const std::size_t boxes = std::min<std::size_t>(frame.boxes.size(), shm::kShmMaxBoxes);

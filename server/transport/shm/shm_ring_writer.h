@@ -1,8 +1,9 @@
 // The frame ring's single writer: a ClientLink subscribed (newest-frame) to
 // the ring's camera, so the sim thread hands it every frame it renders. The
-// pixel channels the ring carries (--shm-channels) are copied once into the
-// next slot under that slot's seqlock; the writer never waits for readers and
-// overwrites the oldest slot.
+// pixel channels the ring carries (--shm-channels) are rendered straight into
+// the next slot (PrepareTargets) under that slot's seqlock, or copied there
+// from a frame rendered elsewhere (Write without PrepareTargets, tests); the
+// writer never waits for readers and overwrites the oldest slot.
 #pragma once
 
 #include <memory>
@@ -20,6 +21,10 @@ class ShmRingWriter : public session::ClientLink {
   void OfferFrame(const session::FrameRef& frame) override;
   // The same for a Frame not from a pool (tests).
   void Write(const session::Frame& frame);
+  // Sim thread: opens the next slot for writing (its seqlock odd) and points
+  // `targets` at its planes, if the frame is of the ring's camera and size.
+  // The next Write/OfferFrame publishes that slot without copying pixels.
+  bool PrepareTargets(uint32_t camera_index, uint32_t width, uint32_t height, session::PixelTargets& targets) override;
   // Nothing to do: the ring is a subscriber, not a client, so no request of
   // its own can be answered. Shared-memory clients are answered through
   // their own links (ShmClientLink).
@@ -32,6 +37,9 @@ class ShmRingWriter : public session::ClientLink {
   std::shared_ptr<ShmRegion> region_;  // keeps the mapping while the scheduler holds this link
   uint32_t camera_index_;
   uint64_t published_ = 0;
+  bool prepared_ = false;  // the next slot holds the next frame's pixels already
+
+  void OpenSlot(uint64_t publication);
 };
 
 }  // namespace sim4cv::transport
