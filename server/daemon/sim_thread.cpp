@@ -1,31 +1,21 @@
 #include "server/daemon/sim_thread.h"
 
 #include <signal.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
 #include <future>
 
 #include "server/common/limits.h"
 #include "server/common/log.h"
 #include "server/daemon/state_message.h"
+#include "server/daemon/tracker_reports.h"
 #include "server/render/gl_context.h"
-#include "server/render/projection.h"
-#include "server/render/renderer.h"
-#include "server/render/scene_graphics.h"
 #include "server/session/client_protocol.h"
 
 namespace sim4cv::daemon {
 namespace {
-
-int64_t MonotonicNanoseconds() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 // Answers a client the sim thread refuses something to (nothing if it has
 // no link), phrased as every other non-fatal Error.
@@ -89,7 +79,7 @@ void SimThread::Start() {
       Fail("an exception of unknown type");
     }
     // GL objects die on the thread whose context is current.
-    renderer_.reset();
+    frames_.Release();
     gl_.reset();
   });
   try {
@@ -166,36 +156,10 @@ void SimThread::RunRealtime() {
   }
 }
 
-void SimThread::BuildGraphics() {
-  // A new scene (or a camera larger than any before) needs new meshes or
-  // larger render targets; the old ones die first, with the context current.
-  uint32_t width = 1, height = 1;
-  for (const auto& camera : sim_.cameras()) {
-    width = std::max(width, camera.width);
-    height = std::max(height, camera.height);
-  }
-  auto graphics = std::make_unique<render::SceneGraphics>(sim_.scene());
-  auto renderer = std::make_unique<render::Renderer>(graphics->meshes(), width, height);
-  std::vector<uint32_t> unoccluded(graphics->instance_id_bound(), 0);
-  // Nothing below throws; the old renderer dies before the meshes it drew.
-  renderer_ = std::move(renderer);
-  graphics_ = std::move(graphics);
-  renderer_width_ = width;
-  renderer_height_ = height;
-  unoccluded_pixels_ = std::move(unoccluded);
-}
+void SimThread::BuildGraphics() { frames_.Build(sim_.scene(), sim_.cameras()); }
 
 bool SimThread::NeedsGraphics(const Simulation::Change& change) const {
-  if (change.new_scene) return true;
-  for (const auto& camera : sim_.cameras()) {
-    if (camera.width > renderer_width_ || camera.height > renderer_height_) return true;
-  }
-  return false;
-}
-
-void SimThread::ForgetClient(session::ClientId client) {
-  auto& reports = sim_.state().tracker_reports;
-  std::erase_if(reports, [client](const sim::TrackerReport& r) { return r.client_id == client; });
+  return change.new_scene || !frames_.Fits(sim_.cameras());
 }
 
 void SimThread::ApplyCommands() {
@@ -208,22 +172,11 @@ void SimThread::ApplyCommands() {
                    [&](session::SubscribeCommand& c) { Subscribe(client, c); },
                    [&](session::StepCommand&) { scheduler_.AddStep(client); },
                    [&](session::ControlsCommand& c) { ApplyControls(c); },
-                   [&](session::TrackerOutputCommand& c) {
-                     sim::TrackerReport report{client, c.frame_id, c.x, c.y, c.width, c.height, c.confidence};
-                     auto& reports = sim_.state().tracker_reports;
-                     auto it =
-                         std::lower_bound(reports.begin(), reports.end(), client,
-                                          [](const sim::TrackerReport& r, uint32_t id) { return r.client_id < id; });
-                     if (it != reports.end() && it->client_id == client) {
-                       *it = report;
-                     } else {
-                       reports.insert(it, report);
-                     }
-                   },
+                   [&](session::TrackerOutputCommand& c) { RecordTrackerReport(sim_.state(), client, c); },
                    [&](session::ConfigureCommand& c) { Configure(c); },
                    [&](session::DisconnectCommand&) {
                      scheduler_.Remove(client);
-                     ForgetClient(client);
+                     ForgetTrackerReport(sim_.state(), client);
                    },
                },
                command.body);
@@ -306,7 +259,6 @@ void SimThread::AfterChange(const Simulation::Change& change, const proto::World
     for (const auto& link : links) OfferError(link.get(), proto::ERROR_CODE_UNKNOWN_CAMERA, message);
   };
   if (change.new_scene) {
-    previous_views_.Clear();  // no flow across worlds
     const auto scene_cameras = static_cast<uint32_t>(sim_.scene().cameras.size());
     tell(scheduler_.DropCamerasFrom(scene_cameras),
          "the camera you subscribed to was removed: the world was reset or a map loaded; subscribe again");
@@ -333,16 +285,13 @@ void SimThread::AdvanceFrame() {
   for (uint32_t i = 0; i < config_.substeps_per_frame(); ++i) sim_.world().Step(state, dt);
   ++state.frame_id;
   PublishState();
-  graphics_->Update(state);
+  frames_.Update(state);
   const auto& cameras = sim_.cameras();
   for (uint32_t camera = 0; camera < cameras.size(); ++camera) {
     const channels::ChannelSet wanted = scheduler_.ChannelsWanted(camera);
     if (wanted != 0) RenderCamera(camera, wanted);
   }
-  // Every camera's pose, rendered or not: the next frame's flow starts here.
-  for (uint32_t camera = 0; camera < cameras.size(); ++camera) {
-    previous_views_.Remember(camera, cameras[camera], graphics_->CameraAt(cameras[camera], state));
-  }
+  frames_.RememberViews(cameras, state);
   if (logger_) {
     logger_->Append(state, scheduler_);
     scheduler_.ReleaseFrames();  // only now, with the record written, may clients see the frames
@@ -352,64 +301,7 @@ void SimThread::AdvanceFrame() {
 void SimThread::RenderCamera(uint32_t camera_index, channels::ChannelSet wanted) {
   session::Frame* frame = nullptr;
   session::FrameRef ref = frame_pool_.Acquire(&frame);
-  const sim::State& state = sim_.state();
-  const sim::CameraSpec& spec = sim_.cameras()[camera_index];
-  // The boxes are extracted from the instance mask.
-  const bool boxes = channels::Has(wanted, proto::CHANNEL_BOXES);
-  if (boxes) wanted |= channels::Bit(proto::CHANNEL_MASK);
-  frame->frame_id = state.frame_id;
-  frame->sim_time = state.sim_time;
-  frame->camera_index = camera_index;
-  frame->camera_name = spec.name;
-  frame->width = spec.width;
-  frame->height = spec.height;
-  frame->channels = 0;
-  // A subscriber that takes pixels in place (the shm ring) gets them read
-  // back straight into its memory: nothing is copied after rendering. Only
-  // channels other subscribers want too land in the frame as well.
-  session::PixelTargets in_place{};
-  channels::ChannelSet others = wanted;
-  bool prepared = false;
-  scheduler_.ForEachLink(camera_index, [&](session::ClientLink& link) {
-    if (!prepared && link.PrepareTargets(camera_index, spec.width, spec.height, in_place)) {
-      prepared = true;
-      others = scheduler_.ChannelsWanted(camera_index, &link);
-    }
-  });
-  render::FrameBuffers buffers{};
-  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
-    const proto::Channel channel = channels::kPixelChannels[i].id;
-    if (!channels::Has(wanted, channel)) continue;
-    buffers[i] = in_place[i] != nullptr ? in_place[i] : frame->Hold(channel).data();
-  }
-
-  auto& labelled = graphics_->labelled_objects();
-  for (const auto& object : labelled) unoccluded_pixels_[object.instance] = 0;
-  render::CameraView view = graphics_->CameraAt(spec, state);
-  view.previous_world_from_camera = previous_views_.Of(camera_index, spec, view);
-  renderer_->Render(view, graphics_->draw_items(), buffers,
-                    boxes ? std::span<uint32_t>(unoccluded_pixels_) : std::span<uint32_t>());
-  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
-    const proto::Channel channel = channels::kPixelChannels[i].id;
-    if (in_place[i] != nullptr && buffers[i] == in_place[i] && channels::Has(others, channel)) {
-      const std::span<uint8_t> plane = frame->Hold(channel);  // another transport sends it too
-      std::memcpy(plane.data(), in_place[i], plane.size());
-    }
-  }
-  frame->boxes.clear();
-  frame->objects.clear();
-  const render::BoxProjector camera(view);
-  frame->intrinsics = camera.intrinsics();
-  frame->camera_pose = render::OpenCvPoseOf(view);
-  if (boxes) {
-    for (auto& object : labelled) object.unoccluded_pixels = unoccluded_pixels_[object.instance];
-    const auto* mask = reinterpret_cast<const uint16_t*>(buffers[*channels::IndexOf(proto::CHANNEL_MASK)]);
-    boxes_.Extract(mask, spec.width, spec.height, labelled, frame->boxes);
-    // 3D ground truth from the very view that was rendered, so it matches the pixels.
-    graphics_->catalog().Fill(graphics_->moving_objects(), camera, frame->boxes, frame->objects);
-  }
-  FillStateMessage(state, frame->state);
-  frame->render_end_mono_ns = MonotonicNanoseconds();
+  frames_.Assemble(camera_index, sim_.cameras()[camera_index], sim_.state(), wanted, scheduler_, *frame);
   scheduler_.Deliver(ref);
 }
 

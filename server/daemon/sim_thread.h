@@ -12,10 +12,9 @@
 #include <vector>
 
 #include "server/daemon/config.h"
+#include "server/daemon/frame_assembler.h"
 #include "server/daemon/run_logger.h"
 #include "server/daemon/simulation.h"
-#include "server/render/ground_truth.h"
-#include "server/render/previous_views.h"
 #include "server/session/command_queue.h"
 #include "server/session/scheduler.h"
 #include "server/session/server_context.h"
@@ -23,8 +22,6 @@
 
 namespace sim4cv::render {
 class GlContext;
-class Renderer;
-class SceneGraphics;
 }  // namespace sim4cv::render
 
 namespace sim4cv::daemon {
@@ -67,8 +64,6 @@ class SimThread {
   // Builds the meshes and renderer for the current scene and cameras; on a
   // throw the old ones stay (strong guarantee).
   void BuildGraphics();
-  // Forgets the tracker report of a client that left (finding 6).
-  void ForgetClient(session::ClientId client);
   void AdvanceFrame();
   // Renders the channels `wanted` (ChannelsWanted) of one camera and hands
   // the frame to the scheduler.
@@ -88,12 +83,7 @@ class SimThread {
   session::Scheduler scheduler_;
   std::vector<session::Command> drained_;
   std::unique_ptr<render::GlContext> gl_;
-  std::unique_ptr<render::SceneGraphics> graphics_;
-  std::unique_ptr<render::Renderer> renderer_;
-  render::BoxExtractor boxes_;
-  render::PreviousViews previous_views_;
-  std::vector<uint32_t> unoccluded_pixels_;
-  uint32_t renderer_width_ = 0, renderer_height_ = 0;
+  FrameAssembler frames_;
   std::string renderer_name_;
   std::atomic<bool> running_{false};
   std::atomic<bool> failed_{false};

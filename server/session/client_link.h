@@ -34,6 +34,10 @@ class ClientLink {
                               PixelTargets& /*targets*/) {
     return false;
   }
+  // Whether this subscriber sends the Frame's own pixels: false for one whose
+  // frames travel another way (a shared-memory client reads the ring), so
+  // no pixels are copied into the Frame for it.
+  virtual bool SendsFramePixels() const { return true; }
 };
 
 }  // namespace sim4cv::session

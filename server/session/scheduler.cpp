@@ -50,13 +50,22 @@ void Scheduler::ConsumeSteps() {
   }
 }
 
-channels::ChannelSet Scheduler::ChannelsWanted(uint32_t camera_index, const ClientLink* except) const {
+channels::ChannelSet Scheduler::ChannelsWanted(uint32_t camera_index) const {
   if (Dead(camera_index)) return 0;
   channels::ChannelSet wanted = 0;
   for (const auto& s : subscriptions_) {
-    if (s.camera_index != camera_index || (except != nullptr && s.link.get() == except)) continue;
     // A subscription always wants something: a frame without pixels still carries its metadata.
-    wanted |= s.channels | channels::Bit(proto::CHANNEL_UNSPECIFIED);
+    if (s.camera_index == camera_index) wanted |= s.channels | channels::Bit(proto::CHANNEL_UNSPECIFIED);
+  }
+  return wanted;
+}
+
+channels::ChannelSet Scheduler::ChannelsSentFromFrame(uint32_t camera_index, const ClientLink* except) const {
+  channels::ChannelSet wanted = 0;
+  for (const auto& s : subscriptions_) {
+    if (s.camera_index == camera_index && s.link && s.link.get() != except && s.link->SendsFramePixels()) {
+      wanted |= s.channels;
+    }
   }
   return wanted;
 }

@@ -36,7 +36,10 @@ class Scheduler {
   bool CameraWanted(uint32_t camera_index) const { return ChannelsWanted(camera_index) != 0; }
   // What the camera's frames must hold: the union of its live subscribers'
   // channels (0: none, nothing to render).
-  channels::ChannelSet ChannelsWanted(uint32_t camera_index, const ClientLink* except = nullptr) const;
+  channels::ChannelSet ChannelsWanted(uint32_t camera_index) const;
+  // What the camera's subscribers that send the Frame's own pixels
+  // (ClientLink::SendsFramePixels) want, but `except`.
+  channels::ChannelSet ChannelsSentFromFrame(uint32_t camera_index, const ClientLink* except) const;
   // The camera's subscribers, for the sim thread to ask which can take
   // pixels in place (ClientLink::PrepareTargets).
   template <typename Visit>

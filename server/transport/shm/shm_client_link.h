@@ -37,6 +37,8 @@ class ShmClientLink : public session::ClientLink {
   // Sim thread.
   void OfferFrame(const session::FrameRef& frame) override;
   void OfferReply(proto::Envelope reply) override;
+  // Its pixels are the ring's.
+  bool SendsFramePixels() const override { return false; }
 
   // Shm thread. Frames offered since the last call.
   uint64_t TakeFramesOffered();

@@ -102,11 +102,12 @@ class ShmTransport : public Transport {
     }
     context_ = &context;
     writer_ = std::make_shared<ShmRingWriter>(region_, static_cast<uint32_t>(camera));
-    // The ring's own newest-frame subscription: the camera renders every frame.
+    // The ring's own newest-frame subscription: the camera renders every
+    // frame, with its channels and the boxes every slot carries.
     writer_id_ = session::NewClientId();
     context.commands.Post(
         {writer_id_, session::SubscribeCommand{static_cast<uint32_t>(camera), proto::DELIVERY_NEWEST,
-                                               options_.channel_mask, writer_}});
+                                               options_.channel_mask | channels::Bit(proto::CHANNEL_BOXES), writer_}});
     thread_ = std::thread([this] { Run(); });
   }
 
