@@ -182,8 +182,8 @@ inline constexpr std::size_t kMaxOutstandingSteps = 64;
 // its transport is sending). While the mailbox is full the client is not
 // ready, so a lockstep simulation waits for it to read, as it waits for its
 // Steps: a client that Steps 64 times and never reads holds at most
-// kLockstepFramesQueued + 1 frames (at 1920x1080 with all channels, 19 MB
-// each), not 64. Two keep a pipelining client's next frame rendered while it
+// kLockstepFramesQueued + 1 frames (at 1920x1080, 19 MB each with RGB, depth
+// and mask, 62 MB with all six pixel channels), not 64. Two keep a pipelining client's next frame rendered while it
 // reads the last one.
 inline constexpr std::size_t kLockstepFramesQueued = 2;
 
