@@ -2,6 +2,7 @@
 sim4cv_test(unit ground_truth_test sim4cv_render)
 sim4cv_test(unit mesh_builder_test sim4cv_render)
 sim4cv_test(unit renderer_test sim4cv_render)
+sim4cv_test(unit channel_render_test sim4cv_render)
 sim4cv_test(unit client_test sim4cv_client)
 sim4cv_test(unit scene_test sim4cv_sim)
 sim4cv_test(unit closed_path_test sim4cv_sim)
