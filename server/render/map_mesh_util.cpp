@@ -44,7 +44,8 @@ uint32_t AddVertex(Mesh& mesh, const Eigen::Vector3f& position, const Eigen::Vec
                    const Eigen::Vector3f& color) {
   mesh.vertices.push_back({{position.x(), position.y(), position.z()},
                            {normal.x(), normal.y(), normal.z()},
-                           {color.x(), color.y(), color.z()}});
+                           {color.x(), color.y(), color.z()},
+                           mesh.semantic});
   return static_cast<uint32_t>(mesh.vertices.size() - 1);
 }
 

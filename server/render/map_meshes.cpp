@@ -10,6 +10,7 @@
 #include "server/render/map_mesh_util.h"
 #include "server/render/object_meshes.h"
 #include "server/render/road_meshes.h"
+#include "server/render/semantic_classes.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::render {
@@ -145,7 +146,9 @@ std::vector<MapDrawable> BuildMapDrawables(const map::Map& map, const map::RoadG
   const GroundGrid grid = MakeGroundGrid(map);
   const int chunk_columns = (grid.columns + kCellsPerChunk - 1) / kCellsPerChunk;
   const int chunk_rows = (grid.rows + kCellsPerChunk - 1) / kCellsPerChunk;
-  std::vector<Mesh> chunks(static_cast<std::size_t>(chunk_columns) * chunk_rows);
+  // The ground is terrain (grass or sand); road tiles set their parts' classes.
+  std::vector<Mesh> chunks(static_cast<std::size_t>(chunk_columns) * chunk_rows,
+                           Labelled(Mesh{}, SemanticClass::kTerrain));
   for (int row = 0; row < chunk_rows; ++row) {
     for (int column = 0; column < chunk_columns; ++column) {
       AppendGround(chunks[row * chunk_columns + column], grid, column * kCellsPerChunk,
@@ -159,13 +162,16 @@ std::vector<MapDrawable> BuildMapDrawables(const map::Map& map, const map::RoadG
     const map::TileCoord tile = map.CoordOf(index);
     const Eigen::Vector2d centre = map.TileCentre(tile);
     const int column = grid.ColumnOf(centre.x()) / kCellsPerChunk, row = grid.RowOf(centre.y()) / kCellsPerChunk;
-    AppendRoadTile(chunks[row * chunk_columns + column], map, graph, tile);
+    Mesh& chunk = chunks[row * chunk_columns + column];
+    AppendRoadTile(chunk, map, graph, tile);
+    chunk.semantic = static_cast<uint32_t>(SemanticClass::kTerrain);
   }
 
   std::vector<MapDrawable> drawables;
   drawables.reserve(chunks.size() + 1 + map.objects.size());
   for (Mesh& chunk : chunks) drawables.push_back({std::move(chunk), Eigen::Matrix4f::Identity(), kUnlabelled, 0});
-  drawables.push_back({MakeSkirt(grid, map.surroundings), Eigen::Matrix4f::Identity(), kUnlabelled, 0});
+  drawables.push_back(
+      {Labelled(MakeSkirt(grid, map.surroundings), SemanticClass::kTerrain), Eigen::Matrix4f::Identity(), kUnlabelled, 0});
   for (std::size_t i = 0; i < map.objects.size(); ++i) {
     const map::MapObject& object = map.objects[i];
     drawables.push_back({MakeObjectMesh(object.kind, map.surroundings, static_cast<uint32_t>(i)), ObjectPose(object),

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "server/common/check.h"
+#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {
@@ -19,7 +20,8 @@ void AddQuad(Mesh& mesh, const std::array<Eigen::Vector3f, 4>& corners, const Ei
   for (const Eigen::Vector3f& corner : corners) {
     mesh.vertices.push_back({{corner.x(), corner.y(), corner.z()},
                              {normal.x(), normal.y(), normal.z()},
-                             {color.x(), color.y(), color.z()}});
+                             {color.x(), color.y(), color.z()},
+                             mesh.semantic});
   }
   for (uint32_t corner : {0u, 1u, 2u, 0u, 2u, 3u}) mesh.indices.push_back(first + corner);
 }
@@ -122,7 +124,7 @@ Mesh MakeGroundPlane(float half_size, const Eigen::Vector3f& color) {
               Eigen::Vector3f::UnitZ(), (color * tint).cwiseMin(1.0f));
     }
   }
-  return mesh;
+  return Labelled(std::move(mesh), SemanticClass::kTerrain);
 }
 
 Mesh MakeRoadLoop(const std::vector<Eigen::Vector2f>& closed_centerline, float lane_width,
@@ -145,7 +147,9 @@ Mesh MakeRoadLoop(const std::vector<Eigen::Vector2f>& closed_centerline, float l
   constexpr float kDashPeriod = 9.0f;
   const std::vector<Eigen::Vector2f> offsets = MiterOffsets(loop);
   Mesh mesh;
+  mesh.semantic = static_cast<uint32_t>(SemanticClass::kRoad);
   AppendRibbon(mesh, loop, offsets, -lane_width, lane_width, kAsphaltZ, asphalt);
+  mesh.semantic = static_cast<uint32_t>(SemanticClass::kLaneMarking);
   const float edge_outer = lane_width - kEdgeInset;
   const float edge_inner = edge_outer - kLineWidth;
   AppendRibbon(mesh, loop, offsets, edge_inner, edge_outer, kMarkingZ, marking);
@@ -176,7 +180,7 @@ Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f&
             {0.5f * length, 0.5f * width, 0.5f * (body_top - body_bottom)}, color);
   AppendBox(mesh, {-0.05f * length, 0.0f, 0.5f * (body_top + 0.5f * height)},
             {0.27f * length, 0.43f * width, 0.5f * (0.5f * height - body_top)}, glass_tint);
-  return mesh;
+  return Labelled(std::move(mesh), SemanticClass::kCar);
 }
 
 Mesh MakeUavMesh(float span, const Eigen::Vector3f& color) {
@@ -199,7 +203,7 @@ Mesh MakeUavMesh(float span, const Eigen::Vector3f& color) {
       AppendBox(mesh, {x, y, 0.5f * arm_thickness + rotor_half.z()}, rotor_half, rotor_color);  // resting on the arm
     }
   }
-  return mesh;
+  return Labelled(std::move(mesh), SemanticClass::kUav);
 }
 
 void AppendMesh(Mesh& into, const Mesh& part, const Eigen::Matrix4f& transform) {
@@ -213,9 +217,11 @@ void AppendMesh(Mesh& into, const Mesh& part, const Eigen::Matrix4f& transform) 
         transform.block<3, 1>(0, 3);
     const Eigen::Vector3f normal =
         (normal_matrix * Eigen::Vector3f(vertex.normal[0], vertex.normal[1], vertex.normal[2])).normalized();
+    // An unlabelled part takes the class of what it is appended to.
     into.vertices.push_back({{position.x(), position.y(), position.z()},
                              {normal.x(), normal.y(), normal.z()},
-                             {vertex.color[0], vertex.color[1], vertex.color[2]}});
+                             {vertex.color[0], vertex.color[1], vertex.color[2]},
+                             vertex.semantic == 255 ? into.semantic : vertex.semantic});
   }
   for (size_t i = 0; i + 2 < part.indices.size(); i += 3) {
     into.indices.push_back(first + part.indices[i]);

@@ -7,6 +7,7 @@
 
 #include "server/render/map_mesh_util.h"
 #include "server/render/mesh_builder.h"
+#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {
@@ -167,18 +168,20 @@ Mesh MakeObstacle() {
 
 }  // namespace
 
+// Each object is one class; a park is labelled terrain (its lawn and paths;
+// its two benches are too small to matter), as Cityscapes labels grass.
 Mesh MakeObjectMesh(map::ObjectKind kind, map::Surroundings surroundings, uint32_t variant) {
   switch (kind) {
     case ObjectKind::kHouse:
-      return MakeHouse(variant);
+      return Labelled(MakeHouse(variant), SemanticClass::kBuilding);
     case ObjectKind::kTree:
-      return MakeTree(variant, surroundings == map::Surroundings::kDesert);
+      return Labelled(MakeTree(variant, surroundings == map::Surroundings::kDesert), SemanticClass::kVegetation);
     case ObjectKind::kLantern:
-      return MakeLantern();
+      return Labelled(MakeLantern(), SemanticClass::kPole);
     case ObjectKind::kPark:
-      return MakePark(variant);
+      return Labelled(MakePark(variant), SemanticClass::kTerrain);
     case ObjectKind::kObstacle:
-      return MakeObstacle();
+      return Labelled(MakeObstacle(), SemanticClass::kObstacle);
   }
   return {};
 }

@@ -21,6 +21,10 @@ struct Vertex {
 struct Mesh {
   std::vector<Vertex> vertices;
   std::vector<uint32_t> indices;
+  // The semantic class the builders give vertices they append from now on
+  // (semantic_classes.h; 255 unlabelled): a builder of a mixed surface (a
+  // road with its markings) sets it before each part.
+  uint32_t semantic = 255;
 };
 
 // Index into the mesh list the Renderer was built with.

@@ -8,6 +8,7 @@
 
 #include "server/common/check.h"
 #include "server/render/map_mesh_util.h"
+#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {
@@ -114,6 +115,7 @@ void AppendCurb(Mesh& mesh, const Piece& piece, double lateral, float z0, float 
 }
 
 void AppendDashes(Mesh& mesh, const Piece& piece, double lateral, const Eigen::Vector3f& color) {
+  mesh.semantic = static_cast<uint32_t>(SemanticClass::kLaneMarking);
   const int periods = std::max(1, static_cast<int>(std::lround(piece.length / kDashPeriod)));
   const double period = piece.length / periods;
   for (int k = 0; k < periods; ++k) {
@@ -125,6 +127,7 @@ void AppendDashes(Mesh& mesh, const Piece& piece, double lateral, const Eigen::V
 
 // Asphalt and centre line of a straight or a curve, from one of its lanes.
 void AppendCarriageway(Mesh& mesh, const Piece& lane, const Eigen::Vector3f& centre_line) {
+  mesh.semantic = static_cast<uint32_t>(SemanticClass::kRoad);
   AppendStrip(mesh, lane, 0.0, lane.length, kLaneEdge, kRoadCentre, kAsphaltHeight, AsphaltPaint());
   AppendStrip(mesh, lane, 0.0, lane.length, kRoadCentre, kFarEdge, kAsphaltHeight, AsphaltPaint());
   AppendDashes(mesh, lane, kRoadCentre, centre_line);
@@ -134,16 +137,19 @@ void AppendCarriageway(Mesh& mesh, const Piece& lane, const Eigen::Vector3f& cen
 // sidewalk with its curb (urban) or a gravel shoulder (desert) outside it.
 void AppendRoadEdge(Mesh& mesh, const map::LaneCurve& lane, bool urban) {
   for (const Piece& piece : lane.pieces()) {
+    mesh.semantic = static_cast<uint32_t>(SemanticClass::kLaneMarking);
     AppendStrip(mesh, piece, 0.0, piece.length, kLaneEdge + kEdgeLineInset, kLaneEdge + kEdgeLineInset + kLineWidth,
                 kMarkingHeight, Plain(kWhitePaint), piece.length);
     // Inside a right turn the verge cannot reach past the bend's centre
     // (small tiles: the inner edge's radius is tile_size / 2 - 4 m).
     const double room = piece.curvature < 0.0 ? -1.0 / piece.curvature + kLaneEdge : kSidewalkWidth;
-    if (urban) {
+    if (urban) {  // the curb belongs to the sidewalk, as in Cityscapes
+      mesh.semantic = static_cast<uint32_t>(SemanticClass::kSidewalk);
       AppendStrip(mesh, piece, 0.0, piece.length, kLaneEdge - std::min(kSidewalkWidth, room), kLaneEdge,
                   kSidewalkHeight, Mottled(kPavement, 1.5, 0.2f, 12));
       AppendCurb(mesh, piece, kLaneEdge, kAsphaltHeight, kSidewalkHeight);
     } else {
+      mesh.semantic = static_cast<uint32_t>(SemanticClass::kTerrain);  // a gravel shoulder
       AppendStrip(mesh, piece, 0.0, piece.length, kLaneEdge - std::min(kShoulderWidth, room), kLaneEdge,
                   kShoulderHeight, Mottled(kGravel, 2.0, 0.2f, 13));
     }
@@ -157,6 +163,7 @@ void AppendRoadEdge(Mesh& mesh, const map::LaneCurve& lane, bool urban) {
 // corner with radius below half the tile), so a fan from the centre covers it.
 void AppendJunctionSurface(Mesh& mesh, const std::vector<const LaneSegment*>& edges, EdgeMask mask,
                            const Eigen::Vector2d& centre, double half) {
+  mesh.semantic = static_cast<uint32_t>(SemanticClass::kRoad);
   const uint32_t hub =
       AddVertex(mesh, Snapped(centre, kAsphaltHeight), Eigen::Vector3f::UnitZ(), AsphaltPaint()(centre));
   // Boundary points in order with the asphalt on their left, so each
@@ -195,6 +202,7 @@ void AppendJunctionSurface(Mesh& mesh, const std::vector<const LaneSegment*>& ed
 void AppendCrosswalks(Mesh& mesh, EdgeMask mask, const Eigen::Vector2d& centre, double half) {
   const double length = std::min(kCrosswalkLength, half - kCrosswalkFromSide - map::kLaneWidth - kCrosswalkEdgeClear);
   if (length < 1.0) return;
+  mesh.semantic = static_cast<uint32_t>(SemanticClass::kCrosswalk);
   const double usable = 2 * map::kLaneWidth - 2 * kCrosswalkEdgeClear;
   const int stripes = static_cast<int>((usable + kCrosswalkStripe) / (2 * kCrosswalkStripe));
   for (map::Edge side : map::kEdges) {
@@ -261,6 +269,7 @@ void AppendRoadTile(Mesh& mesh, const map::Map& map, const map::RoadGraph& graph
     // A dead end's lane turns back on a half circle of 2 m about the tile
     // centre; the 4 m wide band about it is the turning circle's cap.
     if (kind == map::TileKind::kDeadEnd) {
+      mesh.semantic = static_cast<uint32_t>(SemanticClass::kRoad);
       AppendStrip(mesh, pieces.at(1), 0.0, pieces.at(1).length, kLaneEdge, -kLaneEdge, kAsphaltHeight, AsphaltPaint());
     }
   }

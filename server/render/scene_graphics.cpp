@@ -8,6 +8,7 @@
 #include "server/render/camera_math.h"
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
+#include "server/render/semantic_classes.h"
 #include "server/render/traffic_meshes.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/gimbal.h"
@@ -59,7 +60,8 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     const Eigen::Vector3f half(b.half_size.x(), b.half_size.y(), b.height / 2.0f);
     const Eigen::Quaternionf yaw(
         Eigen::AngleAxisf(b.yaw_deg * std::numbers::pi_v<float> / 180.0f, Eigen::Vector3f::UnitZ()));
-    add_static(MakeBox(half, BuildingColour(i)), static_cast<InstanceId>(b.id), proto::OBJECT_CLASS_BUILDING,
+    add_static(Labelled(MakeBox(half, BuildingColour(i)), SemanticClass::kBuilding), static_cast<InstanceId>(b.id),
+               proto::OBJECT_CLASS_BUILDING,
                PoseMatrix(Eigen::Vector3f(b.centre.x(), b.centre.y(), half.z()), yaw));
   }
   if (scene.traffic) {

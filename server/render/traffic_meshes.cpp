@@ -6,6 +6,7 @@
 #include "server/render/map_mesh_util.h"
 #include "server/render/mesh_builder.h"
 #include "server/render/road_meshes.h"
+#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {
@@ -85,7 +86,7 @@ Mesh MakePedestrianMesh(uint32_t variant) {
   AddBox(mesh, {0.0f, 0.0f, 1.15f}, {0.12f, 0.2f, 0.29f}, shirt);        // torso, 0.86 .. 1.44 m
   AddBox(mesh, {0.0f, 0.0f, 1.55f}, {0.1f, 0.085f, 0.12f}, skin);        // head (and neck), 1.43 .. 1.67 m
   AddBox(mesh, {-0.005f, 0.0f, 1.705f}, {0.105f, 0.09f, 0.045f}, hair);  // 1.66 .. kPedestrianHeight
-  return mesh;
+  return Labelled(std::move(mesh), SemanticClass::kPerson);
 }
 
 Mesh MakeTrafficLightMesh() {
@@ -100,10 +101,13 @@ Mesh MakeTrafficLightMesh() {
     AddBox(mesh, {kHousingFront + 0.105f, 0.0f, z + kLampHalf + 0.02f}, {0.1f, 0.13f, 0.01f},
            visor);  // 5 mm off the face
   }
-  return mesh;
+  return Labelled(std::move(mesh), SemanticClass::kTrafficLight);
 }
 
-Mesh MakeLampMesh(Signal signal) { return MakeBox({0.005f, kLampHalf - 0.01f, kLampHalf - 0.01f}, LitColour(signal)); }
+Mesh MakeLampMesh(Signal signal) {
+  return Labelled(MakeBox({0.005f, kLampHalf - 0.01f, kLampHalf - 0.01f}, LitColour(signal)),
+                  SemanticClass::kTrafficLight);
+}
 
 Eigen::Vector3f LampOffset(Signal signal) {
   // The plate's back face 5 mm in front of the dark lamp's face.
@@ -129,7 +133,7 @@ Mesh MakeCrosswalkMarkings(const std::vector<traffic::TrafficPlan::Crosswalk>& c
       mapmesh::AddFlatQuad(mesh, quad, white);
     }
   }
-  return mesh;
+  return Labelled(std::move(mesh), SemanticClass::kCrosswalk);
 }
 
 Eigen::Vector3f TrafficCarColour(uint32_t variant) {

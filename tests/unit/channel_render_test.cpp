@@ -159,7 +159,7 @@ TEST_F(ChannelRenderTest, CameraMovingForwardGivesFlowAwayFromTheCentre) {
   camera.previous_world_from_camera = Camera({-kForward, 0, 0}).world_from_camera;
   const RenderedFrame frame = Render({Item(kWall, {kWallX, 0, 0})}, camera, kAll);
   const float z = kWallX - 0.05f;
-  for (const auto [x, y] : {std::pair{10u, 10u}, {150u, 100u}, {80u, 60u}, {30u, 90u}}) {
+  for (const auto& [x, y] : {std::pair{10u, 10u}, {150u, 100u}, {80u, 60u}, {30u, 90u}}) {
     const std::size_t i = frame.At(x, y);
     const float u = x + 0.5f - kWidth / 2.0f, v = y + 0.5f - kHeight / 2.0f;
     EXPECT_NEAR(frame.flow[2 * i], u * kForward / (z + kForward), 0.05f) << x << "," << y;

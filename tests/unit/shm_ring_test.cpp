@@ -35,7 +35,6 @@ ShmRegionParams Params(const std::string& /*what*/, uint32_t slots) {
 
 // Every value of frame `id` derives from id, so a mix of two frames shows.
 void FillFrame(session::Frame& f, uint64_t id) {
-  const std::size_t pixels = static_cast<std::size_t>(kWidth) * kHeight;
   f.frame_id = id;
   f.sim_time = static_cast<double>(id) * 0.5;
   f.camera_index = 0;
