@@ -19,8 +19,11 @@ inline std::string SourcePath(const std::string& relative) {
   return (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / relative).string();
 }
 
-inline const std::vector<proto::Channel> kAllChannels = {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK,
-                                                        proto::CHANNEL_BOXES};
+// Every channel, so the transport, determinism and replay tests cover each
+// pixel channel of protocol/channels.h.
+inline const std::vector<proto::Channel> kAllChannels = {
+    proto::CHANNEL_RGB,      proto::CHANNEL_DEPTH,   proto::CHANNEL_MASK, proto::CHANNEL_BOXES,
+    proto::CHANNEL_SEMANTIC, proto::CHANNEL_NORMALS, proto::CHANNEL_FLOW};
 
 // A fresh daemon per test; its stderr is printed if the test fails, and a
 // test fails if the daemon did not exit 0 on SIGTERM.

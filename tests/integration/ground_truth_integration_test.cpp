@@ -175,3 +175,65 @@ TEST_F(DaemonTest, PartlyOccludedBuildingProjectsLargerThanItsVisibleBox) {
 
 }  // namespace
 }  // namespace sim4cv::testing
+
+namespace sim4cv::testing {
+namespace {
+
+// The dense channels of a live frame agree with each other and with the
+// mask: sky (infinite depth) is class 10 with zero normals and zero flow;
+// every surface has a unit normal facing the camera and a finite flow; the
+// car's mask pixels are class car (13); the UAV follows the car, so the
+// car's pixels move less than the ground's.
+TEST_F(DaemonTest, DenseChannelsAgreeWithDepthAndMask) {
+  StartDaemon();
+  auto client = Connect("channels");
+  client->Subscribe("uav", kAllChannels, proto::DELIVERY_LOCKSTEP);
+  for (int i = 0; i < 40; ++i) client->StepAndReceive();  // under way: the camera and the car move
+  const proto::Frame& frame = client->StepAndReceive();
+  const auto depth = FindImage(frame, proto::CHANNEL_DEPTH), mask = FindImage(frame, proto::CHANNEL_MASK);
+  const auto semantic = FindImage(frame, proto::CHANNEL_SEMANTIC), normals = FindImage(frame, proto::CHANNEL_NORMALS);
+  const auto flow = FindImage(frame, proto::CHANNEL_FLOW);
+  ASSERT_TRUE(depth && mask && semantic && normals && flow);
+  EXPECT_EQ(semantic->element, proto::ELEMENT_TYPE_U8);
+  EXPECT_EQ(normals->components, 3u);
+  EXPECT_EQ(flow->components, 2u);
+  uint32_t car_pixels = 0, sky_pixels = 0;
+  double car_flow = 0, ground_flow = 0;
+  uint32_t ground_pixels = 0;
+  for (uint32_t y = 0; y < frame.height(); ++y) {
+    for (uint32_t x = 0; x < frame.width(); ++x) {
+      const float d = *depth->at<float>(x, y);
+      const uint8_t cls = *semantic->at<uint8_t>(x, y);
+      const float* n = normals->at<float>(x, y);
+      const float* f = flow->at<float>(x, y);
+      if (std::isinf(d)) {
+        ++sky_pixels;
+        ASSERT_EQ(cls, 10) << x << "," << y;
+        ASSERT_TRUE(n[0] == 0 && n[1] == 0 && n[2] == 0 && f[0] == 0 && f[1] == 0) << x << "," << y;
+        continue;
+      }
+      ASSERT_NE(cls, 10) << "a surface labelled sky at " << x << "," << y;
+      ASSERT_NE(cls, 255) << "an unlabelled surface at " << x << "," << y;
+      ASSERT_NEAR(std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1.0, 1e-3) << x << "," << y;
+      ASSERT_LT(n[2], 0.05f) << "a normal facing away from the camera at " << x << "," << y;
+      ASSERT_TRUE(std::isfinite(f[0]) && std::isfinite(f[1])) << x << "," << y;
+      const double moved = std::hypot(f[0], f[1]);
+      if (*mask->at<uint16_t>(x, y) == kCarId) {
+        ++car_pixels;
+        car_flow += moved;
+        ASSERT_EQ(cls, 13) << "the car's pixel " << x << "," << y;
+      } else if (cls == 0 || cls == 9) {
+        ++ground_pixels;
+        ground_flow += moved;
+      }
+    }
+  }
+  EXPECT_GT(car_pixels, 50u);
+  EXPECT_GT(ground_pixels, 1000u);
+  EXPECT_LT(car_flow / car_pixels, ground_flow / ground_pixels)
+      << "the camera tracks the car, so the car should move less in the image than the ground";
+  (void)sky_pixels;  // the default UAV view may or may not see the horizon
+}
+
+}  // namespace
+}  // namespace sim4cv::testing

@@ -23,7 +23,7 @@ using Clock = std::chrono::steady_clock;
 constexpr int kClients = 3;
 constexpr uint32_t kWidth = 1280, kHeight = 720;
 // RGB8 + float depth + uint16 instance ids, as the daemon's pooled Frame holds them.
-constexpr std::size_t kFrameBytes = std::size_t{kWidth} * kHeight * (3 + 4 + 2);
+constexpr std::size_t kFrameBytes = std::size_t{kWidth} * kHeight * 30;  // every pixel channel (kAllChannels)
 constexpr std::size_t kMiB = std::size_t{1} << 20;
 // The most frames one such client can make the daemon hold: its queue and
 // the one being sent.

@@ -35,7 +35,7 @@ TEST_F(UdpDaemonTest, TrackerLoopOverUdpMatchesTcpByteForByte) {
     ASSERT_TRUE(tcp->ReceiveFrame(over_tcp, 5000ms)) << "frame " << expected_id;
     ASSERT_EQ(over_udp.frame_id(), expected_id);
     ASSERT_EQ(over_tcp.frame_id(), expected_id);
-    ASSERT_EQ(over_udp.images_size(), 3);
+    ASSERT_EQ(over_udp.images_size(), 6);  // every pixel channel, semantic, normals and flow included
     EXPECT_EQ(over_udp.images(0).data().size(), 320u * 180 * 3);
     EXPECT_FALSE(over_udp.boxes().empty());
     EXPECT_EQ(over_udp.state().frame_id(), expected_id);
@@ -71,13 +71,14 @@ TEST_F(UdpDaemonTest, MtuSizedDatagramsCarryWholeFrames) {
     udp->Step();
     ASSERT_TRUE(udp->ReceiveFrame(frame, 5000ms));
     EXPECT_EQ(frame.frame_id(), expected_id);
-    ASSERT_EQ(frame.images_size(), 3);
+    ASSERT_EQ(frame.images_size(), 6);
     EXPECT_EQ(frame.images(1).data().size(), 320u * 180 * 4);
+    EXPECT_EQ(frame.images(5).data().size(), 320u * 180 * 8);  // flow
   }
   const proto::Stats stats = udp->GetStats();
-  // 518 KB of pixels in datagrams of at most 1472 bytes: hundreds of chunks per frame.
+  // 1.7 MB of pixels in datagrams of at most 1472 bytes: over a thousand chunks per frame.
   EXPECT_EQ(Counter(stats, "udp.frames_sent"), 10u);
-  EXPECT_GE(Counter(stats, "udp.chunks_sent"), 10u * 320 * 180 * 9 / 1472);
+  EXPECT_GE(Counter(stats, "udp.chunks_sent"), 10u * 320 * 180 * 30 / 1472);
   EXPECT_EQ(udp->frames_dropped_incomplete(), 0u);
 }
 
