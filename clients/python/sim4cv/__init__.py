@@ -24,6 +24,7 @@ from .client import (
     find_image,
     image_array,
 )
+from . import visualize
 
 # Re-export enum values (CHANNEL_RGB, DELIVERY_LOCKSTEP, ERROR_CODE_UNKNOWN_CAMERA, ...).
 for _enum in pb.DESCRIPTOR.enum_types_by_name.values():
@@ -35,5 +36,5 @@ __all__ = [
     "pb", "Client", "ServerError", "ConnectionClosed", "ProtocolError", "FramedSocket",
     "image_array", "find_image", "channel_value", "delivery_value", "entity_kind_value",
     "encode_envelope", "decode_envelope", "encode_length_prefix", "decode_length_prefix",
-    "PROTOCOL_VERSION", "DEFAULT_MAX_MESSAGE_BYTES",
+    "PROTOCOL_VERSION", "DEFAULT_MAX_MESSAGE_BYTES", "visualize",
 ]

@@ -225,11 +225,13 @@ def entity_kind_value(kind):
 # Images
 # --------------------------------------------------------------------------
 
-# PixelFormat -> (numpy dtype, channels per pixel)
-_FORMATS = {
-    pb.PIXEL_FORMAT_RGB8: (np.dtype(np.uint8), 3),
-    pb.PIXEL_FORMAT_DEPTH_F32: (np.dtype("<f4"), 1),
-    pb.PIXEL_FORMAT_INSTANCE_U16: (np.dtype("<u2"), 1),
+# Image.element -> numpy dtype. Each Image says its element type and
+# components, so any channel, including ones added after this client, can be
+# viewed without a table of channels or formats.
+_ELEMENTS = {
+    pb.ELEMENT_TYPE_U8: np.dtype(np.uint8),
+    pb.ELEMENT_TYPE_U16: np.dtype("<u2"),
+    pb.ELEMENT_TYPE_F32: np.dtype("<f4"),
 }
 
 
@@ -243,8 +245,10 @@ def find_image(frame, channel):
 
 
 def image_array(frame, channel):
-    """A numpy view of one channel's pixels:
-    RGB -> (h, w, 3) uint8, DEPTH -> (h, w) float32 metres, MASK -> (h, w) uint16.
+    """A numpy view of one channel's pixels, shaped by Image.element and
+    Image.components: RGB -> (h, w, 3) uint8, DEPTH -> (h, w) float32 metres,
+    MASK -> (h, w) uint16, SEMANTIC -> (h, w) uint8 class ids, NORMALS ->
+    (h, w, 3) float32, FLOW -> (h, w, 2) float32 pixels (docs/protocol.md §8).
 
     The array wraps the received bytes without copying (honouring the row
     stride), so it is read-only; call .copy() to get a writable array.
@@ -255,9 +259,12 @@ def image_array(frame, channel):
         raise KeyError("frame %d does not carry channel %s" % (
             frame.frame_id, pb.Channel.Name(channel_value(channel))))
     try:
-        dtype, components = _FORMATS[image.format]
+        dtype = _ELEMENTS[image.element]
     except KeyError:
-        raise ValueError("unsupported pixel format %d" % image.format) from None
+        raise ValueError("unsupported element type %d" % image.element) from None
+    components = image.components
+    if components < 1:
+        raise ValueError("image of channel %s has %d components" % (pb.Channel.Name(image.channel), components))
     width, height, stride = frame.width, frame.height, image.stride
     data = image.data  # one bytes object; the array below keeps it alive
     row_bytes = width * components * dtype.itemsize
