@@ -358,13 +358,15 @@ def make_frame(width, height, stride_padding=0):
     depth = np.linspace(0.5, 100, height * width, dtype="<f4").reshape(height, width)
     depth[0, 0] = np.inf
     mask = (np.arange(height * width, dtype="<u2") % 7).reshape(height, width)
-    for channel, fmt, array in ((pb.CHANNEL_RGB, pb.PIXEL_FORMAT_RGB8, rgb),
-                                (pb.CHANNEL_DEPTH, pb.PIXEL_FORMAT_DEPTH_F32, depth),
-                                (pb.CHANNEL_MASK, pb.PIXEL_FORMAT_INSTANCE_U16, mask)):
+    for channel, fmt, element, components, array in (
+            (pb.CHANNEL_RGB, pb.PIXEL_FORMAT_RGB8, pb.ELEMENT_TYPE_U8, 3, rgb),
+            (pb.CHANNEL_DEPTH, pb.PIXEL_FORMAT_DEPTH_F32, pb.ELEMENT_TYPE_F32, 1, depth),
+            (pb.CHANNEL_MASK, pb.PIXEL_FORMAT_INSTANCE_U16, pb.ELEMENT_TYPE_U16, 1, mask)):
         row = array.reshape(height, -1).view(np.uint8)
         padded = np.zeros((height, row.shape[1] + stride_padding), np.uint8)
         padded[:, :row.shape[1]] = row
-        frame.images.add(channel=channel, format=fmt, stride=padded.shape[1], data=padded.tobytes())
+        frame.images.add(channel=channel, format=fmt, element=element, components=components,
+                         stride=padded.shape[1], data=padded.tobytes())
     return frame, rgb, depth, mask
 
 
