@@ -6,11 +6,11 @@
 #include <limits>
 #include <numbers>
 
+#include "protocol/semantic_classes.h"
 #include "server/common/check.h"
 #include "server/render/map_mesh_util.h"
 #include "server/render/object_meshes.h"
 #include "server/render/road_meshes.h"
-#include "server/render/semantic_classes.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::render {

@@ -7,8 +7,8 @@
 #include <numbers>
 #include <utility>
 
+#include "protocol/semantic_classes.h"
 #include "server/common/check.h"
-#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <numbers>
 
+#include "protocol/semantic_classes.h"
 #include "server/render/map_mesh_util.h"
 #include "server/render/mesh_builder.h"
-#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {

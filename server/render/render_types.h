@@ -7,8 +7,11 @@
 #include <vector>
 
 #include "protocol/channels.h"
+#include "protocol/semantic_classes.h"
 
 namespace sim4cv::render {
+
+using semantic::SemanticClass;
 
 struct Vertex {
   float position[3];
@@ -26,6 +29,14 @@ struct Mesh {
   // road with its markings) sets it before each part.
   uint32_t semantic = 255;
 };
+
+// Gives every vertex of `mesh` the class `semantic`, and makes it the class
+// of vertices appended later; returns the mesh, for use on a fresh one.
+inline Mesh Labelled(Mesh mesh, semantic::SemanticClass semantic) {
+  for (Vertex& vertex : mesh.vertices) vertex.semantic = static_cast<uint32_t>(semantic);
+  mesh.semantic = static_cast<uint32_t>(semantic);
+  return mesh;
+}
 
 // Index into the mesh list the Renderer was built with.
 using MeshId = uint32_t;

@@ -6,9 +6,9 @@
 #include <iterator>
 #include <vector>
 
+#include "protocol/semantic_classes.h"
 #include "server/common/check.h"
 #include "server/render/map_mesh_util.h"
-#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "protocol/semantic_classes.h"
 #include "server/common/check.h"
 #include "server/render/camera_math.h"
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
-#include "server/render/semantic_classes.h"
 #include "server/render/traffic_meshes.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/gimbal.h"

@@ -3,10 +3,10 @@
 #include <Eigen/Geometry>
 #include <array>
 
+#include "protocol/semantic_classes.h"
 #include "server/render/map_mesh_util.h"
 #include "server/render/mesh_builder.h"
 #include "server/render/road_meshes.h"
-#include "server/render/semantic_classes.h"
 
 namespace sim4cv::render {
 namespace {

@@ -2,7 +2,7 @@
 // every surface of the shipped scenes is labelled: rendering them with
 // CHANNEL_SEMANTIC leaves no pixel unlabelled, and shows the classes the
 // scene is made of.
-#include "server/render/semantic_classes.h"
+#include "protocol/semantic_classes.h"
 
 #include <gtest/gtest.h>
 
@@ -24,6 +24,8 @@ namespace sim4cv::render {
 namespace {
 
 using Class = SemanticClass;
+using semantic::kSemanticClasses;
+using semantic::SemanticClassInfo;
 
 TEST(SemanticClassesTest, CityscapesTrainIdsAndPaletteWhereCityscapesHasTheClass) {
   std::set<int> ids;

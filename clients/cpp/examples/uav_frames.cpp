@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "channel_colours.h"
 #include "sim4cv/client.h"
 
 namespace {
@@ -134,32 +135,6 @@ cv::Mat AnnotatedRgb(const Frame& frame) {
   return bgr;
 }
 
-// Near is warm, far is cool; pixels that hit nothing (+inf) stay black.
-cv::Mat FalseColourDepth(const cv::Mat& depth) {
-  const cv::Mat finite = (depth == depth) & (depth < std::numeric_limits<float>::infinity());  // NaN != NaN
-  double near = 0, far = 1;
-  if (cv::countNonZero(finite) > 0) cv::minMaxLoc(depth, &near, &far, nullptr, nullptr, finite);
-  cv::Mat scaled;
-  depth.convertTo(scaled, CV_8U, -255.0 / std::max(far - near, 1e-6), 255.0 * far / std::max(far - near, 1e-6));
-  cv::Mat coloured;
-  cv::applyColorMap(scaled, coloured, cv::COLORMAP_TURBO);
-  coloured.setTo(cv::Scalar::all(0), ~finite);
-  return coloured;
-}
-
-// A fixed colour per instance id; background (0) black.
-cv::Mat ColouredMask(const cv::Mat& mask) {
-  cv::Mat coloured(mask.size(), CV_8UC3);
-  for (int row = 0; row < mask.rows; ++row) {
-    for (int col = 0; col < mask.cols; ++col) {
-      const uint32_t id = mask.at<uint16_t>(row, col);
-      coloured.at<cv::Vec3b>(row, col) =
-          id == 0 ? cv::Vec3b(0, 0, 0) : cv::Vec3b(64 + id * 97 % 192, 64 + id * 57 % 192, 64 + id * 151 % 192);
-    }
-  }
-  return coloured;
-}
-
 void Write(const std::filesystem::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) throw std::runtime_error("cannot write " + path.string());
   std::printf("wrote %s\n", path.c_str());
@@ -174,10 +149,23 @@ void SaveFrames(const std::vector<Frame>& frames, const std::string& out_dir) {
     return std::filesystem::path(out_dir) / file;
   };
   for (const Frame& frame : frames) Write(name("frame", frame), AnnotatedRgb(frame));
-  const cv::Mat depth = Wrap(frames.front(), sim4cv::proto::CHANNEL_DEPTH, CV_32FC1);
-  if (!depth.empty()) Write(name("depth", frames.front()), FalseColourDepth(depth));
-  const cv::Mat mask = Wrap(frames.front(), sim4cv::proto::CHANNEL_MASK, CV_16UC1);
-  if (!mask.empty()) Write(name("mask", frames.front()), ColouredMask(mask));
+  // The ground truth of the last saved frame (the first has no motion for flow).
+  using namespace sim4cv::examples;
+  const Frame& last = frames.back();
+  const struct {
+    const char* what;
+    sim4cv::proto::Channel channel;
+    int cv_type;
+    cv::Mat (*colours)(const cv::Mat&);
+  } truths[] = {{"depth", sim4cv::proto::CHANNEL_DEPTH, CV_32FC1, DepthColours},
+                {"mask", sim4cv::proto::CHANNEL_MASK, CV_16UC1, MaskColours},
+                {"semantic", sim4cv::proto::CHANNEL_SEMANTIC, CV_8UC1, SemanticColours},
+                {"normals", sim4cv::proto::CHANNEL_NORMALS, CV_32FC3, NormalsColours},
+                {"flow", sim4cv::proto::CHANNEL_FLOW, CV_32FC2, FlowColours}};
+  for (const auto& truth : truths) {
+    const cv::Mat pixels = Wrap(last, truth.channel, truth.cv_type);
+    if (!pixels.empty()) Write(name(truth.what, last), truth.colours(pixels));
+  }
 }
 
 double Percentile(std::vector<double> sorted_copy, double fraction) {
@@ -195,7 +183,8 @@ int Run(const Options& options) {
   const bool lockstep = client.welcome().mode() != sim4cv::proto::SIM_MODE_REALTIME;
   client.Subscribe("uav",
                    {sim4cv::proto::CHANNEL_RGB, sim4cv::proto::CHANNEL_DEPTH, sim4cv::proto::CHANNEL_MASK,
-                    sim4cv::proto::CHANNEL_BOXES},
+                    sim4cv::proto::CHANNEL_BOXES, sim4cv::proto::CHANNEL_SEMANTIC, sim4cv::proto::CHANNEL_NORMALS,
+                    sim4cv::proto::CHANNEL_FLOW},
                    lockstep ? sim4cv::proto::DELIVERY_LOCKSTEP : sim4cv::proto::DELIVERY_NEWEST);
 
   const std::vector<int> save_at = EvenlySpaced(options.save, options.frames);

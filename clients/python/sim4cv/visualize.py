@@ -10,7 +10,7 @@
 import numpy as np
 
 # id -> (name, RGB colour, Cityscapes trainId it folds into; 255 = ignore).
-# The table of docs/protocol.md, "Semantic classes" (server/render/semantic_classes.h).
+# The table of docs/protocol.md, "Semantic classes" (protocol/semantic_classes.h).
 SEMANTIC_CLASSES = {
     0: ("road", (128, 64, 128), 0),
     1: ("sidewalk", (244, 35, 232), 1),

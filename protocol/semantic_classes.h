@@ -2,17 +2,18 @@
 // class, its value is the Cityscapes trainId and its colour the Cityscapes
 // palette, so a network trained on Cityscapes reads sim4cv frames without
 // remapping; classes Cityscapes lacks come after 18, each with the trainId it
-// folds into for a Cityscapes evaluation (255: ignored). docs/protocol.md,
-// "Semantic classes", is generated from nothing but says the same.
+// folds into for a Cityscapes evaluation (255: ignored). Part of the wire
+// contract, shared by the daemon and the C++ clients; docs/protocol.md
+// ("Semantic classes") and the Python client's sim4cv.visualize list the same
+// (tests/python/test_channels.py checks the Python table against this file).
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <string_view>
 
-#include "server/render/render_types.h"
 
-namespace sim4cv::render {
+namespace sim4cv::semantic {
 
 // X(Name, value, "name", red, green, blue, Cityscapes trainId it folds into)
 #define SIM4CV_SEMANTIC_CLASSES(X)                        \
@@ -62,14 +63,6 @@ inline constexpr std::array kSemanticClasses = {
 };
 
 // Where nothing is drawn: the clear value of the semantic render target.
-static_assert(static_cast<int>(SemanticClass::kSky) == 10, "channels/semantic.cpp clears to 10");
+static_assert(static_cast<int>(SemanticClass::kSky) == 10, "server/render/channels/semantic.cpp clears to 10");
 
-// Gives every vertex of `mesh` the class `semantic`, and makes it the class
-// of vertices appended later; returns the mesh, for use on a fresh one.
-inline Mesh Labelled(Mesh mesh, SemanticClass semantic) {
-  for (Vertex& vertex : mesh.vertices) vertex.semantic = static_cast<uint32_t>(semantic);
-  mesh.semantic = static_cast<uint32_t>(semantic);
-  return mesh;
-}
-
-}  // namespace sim4cv::render
+}  // namespace sim4cv::semantic
