@@ -40,7 +40,7 @@ void ProtocolHarness::DrainCommands() {
 }
 
 FuzzSession::FuzzSession(const session::ServerContext& context)
-    : protocol(session::NewClientId(), context, link, mailbox) {}
+    : protocol(session::NewClientId(), context, link, &mailbox) {}
 
 FuzzSession::~FuzzSession() { protocol.Disconnect(); }
 

@@ -1,5 +1,6 @@
 #include "server/session/client_protocol.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -32,7 +33,7 @@ std::string CheckFinite(const char* field, double value) {
 }  // namespace
 
 ClientProtocol::ClientProtocol(ClientId client, const ServerContext& context, std::shared_ptr<ClientLink> link,
-                               FrameMailbox& mailbox)
+                               FrameMailbox* mailbox)
     : client_(client), context_(context), link_(std::move(link)), mailbox_(mailbox) {}
 
 Outcome ClientProtocol::Refuse(proto::ErrorCode code, const std::string& message, bool fatal, proto::Envelope& reply) {
@@ -178,9 +179,13 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
   subscription_.set_camera(subscribe.camera());
   *subscription_.mutable_channels() = subscribe.channels();
   subscription_.set_delivery(delivery);
-  mailbox_.Reset(delivery, &context_.commands);
+  std::shared_ptr<const MailboxGate> gate;
+  if (mailbox_) {
+    mailbox_->Reset(delivery, &context_.commands);
+    gate = mailbox_->gate();
+  }
   context_.commands.Post(
-      {client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, seen, link_.lock(), mailbox_.gate()}});
+      {client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, seen, link_.lock(), std::move(gate)}});
   *reply.mutable_subscribed() = subscription_;
   return Outcome::kReply;
 }
@@ -281,8 +286,8 @@ Outcome ClientProtocol::HandleConfigure(const proto::Configure& request, proto::
   return Outcome::kNoReply;
 }
 
-void ClientProtocol::OnFrameSent() {
-  if (outstanding_steps_ > 0) --outstanding_steps_;
+void ClientProtocol::OnFramesSent(uint64_t count) {
+  outstanding_steps_ -= std::min(count, outstanding_steps_);
 }
 
 void ClientProtocol::Disconnect() {

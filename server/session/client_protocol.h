@@ -23,8 +23,11 @@ class ClientProtocol {
     kReplyAndClose,  // send `reply` (a fatal Error), then close the connection
   };
 
+  // `mailbox`: where the transport takes this client's frames from; null for
+  // a transport whose frames reach the client another way (the shm ring),
+  // whose subscriptions then never hold lockstep back on a full mailbox.
   ClientProtocol(ClientId client, const ServerContext& context, std::shared_ptr<ClientLink> link,
-                 FrameMailbox& mailbox);
+                 FrameMailbox* mailbox);
 
   // Handles one decoded envelope from the client; fills `reply` when the
   // outcome says so.
@@ -43,7 +46,9 @@ class ClientProtocol {
   static void FillWelcome(const ServerContext& context, ClientId client, proto::Welcome& welcome);
 
   // The transport delivered one frame; a lockstep client may Step again.
-  void OnFrameSent();
+  void OnFrameSent() { OnFramesSent(1); }
+  // `count` frames reached the client at once (the shm ring counts them).
+  void OnFramesSent(uint64_t count);
 
   // The connection is gone: tell the sim thread (once).
   void Disconnect();
@@ -73,7 +78,7 @@ class ClientProtocol {
   // Weak: the link (a transport session) owns this protocol object, and a
   // strong pointer back would keep every closed session alive.
   std::weak_ptr<ClientLink> link_;
-  FrameMailbox& mailbox_;
+  FrameMailbox* mailbox_;
   std::string client_name_;
   bool handshaken_ = false;
   bool subscribed_ = false;

@@ -120,6 +120,11 @@ proto::Frame& FrameEncoder::FreshMeta() {
   return *google::protobuf::Arena::CreateMessage<proto::Frame>(&*arena_);
 }
 
+void FrameEncoder::Encode(const session::Frame& frame, const session::ClientSession& session, bool length_prefix) {
+  const session::ClientProtocol& protocol = session.protocol();
+  Encode(frame, frame.camera_name, protocol.subscription(), protocol.with_state(), session.dropped(), length_prefix);
+}
+
 void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera_name,
                           const proto::Subscribed& subscription, bool with_state, uint64_t dropped, bool length_prefix) {
   bool with_boxes = false;

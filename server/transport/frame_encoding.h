@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "server/session/client_session.h"
 #include "server/session/frame.h"
 #include "sim4cv.pb.h"
 
@@ -32,6 +33,9 @@ class FrameEncoder {
   // Frame.dropped_frames. With `length_prefix`, the 4-byte TCP prefix leads.
   void Encode(const session::Frame& frame, const std::string& camera_name, const proto::Subscribed& subscription,
               bool with_state, uint64_t dropped, bool length_prefix);
+
+  // The same for `session`'s subscription: its channels, state, drop count.
+  void Encode(const session::Frame& frame, const session::ClientSession& session, bool length_prefix);
 
   std::span<const Segment> segments() const { return {segments_.data(), segment_count_}; }
   std::size_t total_size() const { return total_size_; }

@@ -54,7 +54,6 @@ struct Attachment {
   // One "connection" of ClientProtocol: replaced after a fatal Error, like a TCP reconnect.
   session::ClientId id = 0;
   std::shared_ptr<ShmClientLink> link;  // always set; a closed one is replaced on the next message
-  session::FrameMailbox mailbox;        // unused: ClientProtocol needs one
   std::unique_ptr<session::ClientProtocol> protocol;
   bool welcomed = false;
 };
@@ -311,15 +310,14 @@ class ShmTransport : public Transport {
     if (!a.protocol) {
       if (a.link->closed()) a.link = NewLink(a);
       a.id = session::NewClientId();
-      a.protocol = std::make_unique<session::ClientProtocol>(a.id, *context_, a.link, a.mailbox);
+      // No mailbox: the client's frames are the ring's.
+      a.protocol = std::make_unique<session::ClientProtocol>(a.id, *context_, a.link, nullptr);
       a.welcomed = false;
       LOG_INFO("client " << a.id << " connected over shared memory " << options_.name);
     }
-    // Frames the ring received for this client since its last message; more
-    // than the Step limit cannot matter.
-    const uint64_t delivered =
-        std::min<uint64_t>(a.link->TakeFramesOffered(), session::FrameMailbox::kMaxLockstepBacklog);
-    for (uint64_t n = 0; n < delivered; ++n) a.protocol->OnFrameSent();
+    // Every frame the ring published for this client since its last message
+    // is delivered: it is in the ring the moment it is offered.
+    a.protocol->OnFramesSent(a.link->TakeFramesOffered());
 
     Outcome outcome;
     const bool parsed = request_.ParseFromArray(data, static_cast<int>(size));

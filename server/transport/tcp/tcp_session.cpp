@@ -18,7 +18,7 @@ TcpSession::TcpSession(asio::ip::tcp::socket socket, session::ClientId client, c
       reader_(context.max_message_bytes),
       deadlines_(options.timeouts, Clock::now()),
       timer_(socket_.get_executor()) {
-  frame_buffers_.reserve(8);
+  frame_buffers_.reserve(2 * channels::kPixelChannelCount + 1);  // FrameEncoder's most segments
   boost::system::error_code ignored;
   socket_.set_option(asio::ip::tcp::no_delay(true), ignored);  // frames must leave at once
   if (options.send_buffer_bytes > 0) {
@@ -27,7 +27,9 @@ TcpSession::TcpSession(asio::ip::tcp::socket socket, session::ClientId client, c
 }
 
 void TcpSession::Start() {
-  protocol_ = std::make_unique<session::ClientProtocol>(client_, context_, shared_from_this(), mailbox_);
+  session_ = session::ClientSession::Create(client_, context_, [weak = weak_from_this()] {
+    if (auto self = weak.lock()) self->WakeWriter();
+  });
   ArmTimer();
   ContinueReading();
 }
@@ -97,7 +99,7 @@ void TcpSession::HandleRequest() {
         proto::ERROR_CODE_MALFORMED_MESSAGE,
         "the " + std::to_string(body.size()) + " bytes after the length prefix are not a valid Envelope", true, reply_);
   } else {
-    outcome = protocol_->Handle(request_, reply_);
+    outcome = session_->Handle(request_, reply_);
     if (reply_.has_welcome()) deadlines_.Handshaken();
   }
   // The parsed fields of a large message would keep its memory: give it back.
@@ -122,7 +124,7 @@ void TcpSession::Reply(Outcome outcome) {
 void TcpSession::CloseAfterWrites(const proto::Envelope& error) {
   LOG_INFO("client " << client_ << " refused: " << error.error().message());
   close_after_writes_ = true;
-  closing_ = true;
+  if (session_) session_->StopOffers();
   close_deadline_ = Clock::now() + std::chrono::milliseconds(limits::kCloseLingerMs);
   ArmTimer();
 }
@@ -167,18 +169,6 @@ void TcpSession::OnTimer() {
   ArmTimer();
 }
 
-void TcpSession::OfferFrame(const session::FrameRef& frame) {
-  if (closing_) return;
-  mailbox_.Offer(frame);
-  WakeWriter();
-}
-
-void TcpSession::OfferReply(proto::Envelope reply) {
-  if (closing_) return;  // nobody left to answer
-  offered_replies_.Offer(std::move(reply));
-  WakeWriter();
-}
-
 // Sim thread. One pending wake-up is enough however many offers arrive before it runs.
 void TcpSession::WakeWriter() {
   if (!pump_posted_.exchange(true)) {
@@ -191,7 +181,8 @@ void TcpSession::WakeWriter() {
 
 // Queues the sim thread's replies behind ClientProtocol's; nothing after a fatal Error.
 void TcpSession::TakeOfferedReplies() {
-  offered_replies_.TakeAll(offered_);
+  if (!session_) return;
+  session_->TakeReplies(offered_);
   for (const proto::Envelope& reply : offered_) {
     if (close_after_writes_) break;
     QueueEnvelope(reply);
@@ -206,11 +197,11 @@ void TcpSession::PumpWrites() {
   TakeOfferedReplies();
   if (!replies_.empty()) return WriteReply();
   if (close_after_writes_) return Close();
-  if (!next_frame_) next_frame_ = mailbox_.Take();
-  if (!next_frame_) return;
-  // A reply offered before this frame may have arrived since the look above; it goes first.
-  if (offered_replies_.pending()) return PumpWrites();
-  WriteFrame(std::move(next_frame_));
+  if (!session_) return;
+  session::FrameRef frame = session_->NextFrame();
+  if (frame) return WriteFrame(std::move(frame));
+  // None, or a reply offered before the next frame arrived meanwhile: it goes first.
+  if (session_->replies_pending()) PumpWrites();
 }
 
 void TcpSession::WriteReply() {
@@ -229,17 +220,14 @@ void TcpSession::WriteReply() {
 }
 
 void TcpSession::WriteFrame(session::FrameRef frame) {
-  // A frame of the camera this client subscribed to before a re-subscribe is stale.
-  if (!protocol_->subscribed() || frame->camera_index != protocol_->camera_index()) return PumpWrites();
-  encoder_.Encode(*frame, frame->camera_name, protocol_->subscription(), protocol_->with_state(), mailbox_.dropped(),
-                  true);
+  encoder_.Encode(*frame, *session_, true);
   frame_buffers_.clear();
   for (const Segment& segment : encoder_.segments()) frame_buffers_.emplace_back(segment.data, segment.size);
   frame_in_flight_ = std::move(frame);
   writing_ = true;
   asio::async_write(socket_, frame_buffers_, [self = shared_from_this()](boost::system::error_code error, std::size_t) {
     self->frame_in_flight_.reset();
-    self->protocol_->OnFrameSent();
+    self->session_->FrameDone();
     self->OnWritten(error);
   });
 }
@@ -260,14 +248,11 @@ void TcpSession::OnWritten(const boost::system::error_code& error) {
 void TcpSession::Close() {
   if (closed_) return;
   closed_ = true;
-  closing_ = true;
   boost::system::error_code ignored;
   socket_.shutdown(asio::ip::tcp::socket::shutdown_both, ignored);
   socket_.close(ignored);
   timer_.cancel();
-  if (protocol_) protocol_->Disconnect();
-  next_frame_.reset();
-  mailbox_.Reset(proto::DELIVERY_NEWEST);  // release frames back to the pool now
+  if (session_) session_->Close(true);
   if (on_closed_) on_closed_(client_);
 }
 

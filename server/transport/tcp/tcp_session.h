@@ -1,6 +1,8 @@
-// One TCP connection: reads length-prefixed Envelopes, asks ClientProtocol
-// what they mean, writes replies and frames. Runs on the transport's Asio
-// thread, except OfferFrame and OfferReply, which the sim thread calls.
+// One TCP connection: reads length-prefixed Envelopes, hands them to its
+// session::ClientSession (which decides what they mean and holds the frames
+// and the sim thread's replies for it), writes replies and frames. Runs on
+// the transport's Asio thread; the sim thread only offers to the session,
+// which wakes this one.
 //
 // What one client can make it hold is bounded (docs/protocol.md, section 11):
 // a message's bytes only as they arrive (MessageReader), replies waiting to
@@ -20,8 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "server/session/client_protocol.h"
-#include "server/session/offered_replies.h"
+#include "server/session/client_session.h"
 #include "server/transport/frame_encoding.h"
 #include "server/transport/tcp/connection_deadlines.h"
 #include "server/transport/tcp/message_reader.h"
@@ -29,7 +30,7 @@
 
 namespace sim4cv::transport {
 
-class TcpSession : public session::ClientLink, public std::enable_shared_from_this<TcpSession> {
+class TcpSession : public std::enable_shared_from_this<TcpSession> {
  public:
   using OnClosed = std::function<void(session::ClientId)>;
 
@@ -44,10 +45,6 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   // Closes the socket at once and tells the sim thread the client is gone.
   void Close();
 
-  void OfferFrame(const session::FrameRef& frame) override;
-  // Queued for the Asio thread, which sends it like ClientProtocol's replies.
-  void OfferReply(proto::Envelope reply) override;
-
  private:
   using Clock = std::chrono::steady_clock;
 
@@ -60,7 +57,7 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   // Appends the framed envelope to the replies; returns its size in bytes.
   std::size_t QueueEnvelope(const proto::Envelope& envelope);
   // Bytes of replies waiting to be sent: queued here, in flight, and offered by the sim thread.
-  std::size_t Backlog() const { return queued_bytes_ + offered_replies_.bytes(); }
+  std::size_t Backlog() const { return queued_bytes_ + (session_ ? session_->reply_bytes() : 0); }
   void ArmTimer();
   void OnTimer();
   void TakeOfferedReplies();
@@ -74,8 +71,7 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   session::ClientId client_;
   const session::ServerContext& context_;
   OnClosed on_closed_;
-  std::unique_ptr<session::ClientProtocol> protocol_;
-  session::FrameMailbox mailbox_;
+  std::shared_ptr<session::ClientSession> session_;  // null for a client refused before Start
 
   // Reading (reused buffers: nothing allocated per message once warm; those
   // a large message grew are given back after it).
@@ -96,17 +92,13 @@ class TcpSession : public session::ClientLink, public std::enable_shared_from_th
   std::deque<std::string> replies_;
   std::string reply_in_flight_;
   std::size_t queued_bytes_ = 0;  // replies_ and reply_in_flight_
-  session::OfferedReplies offered_replies_;  // from the sim thread
-  std::vector<proto::Envelope> offered_;     // reused: those taken from offered_replies_
-  session::FrameRef next_frame_;             // taken from the mailbox, waiting for replies to go first
+  std::vector<proto::Envelope> offered_;  // reused: the sim thread's replies taken from the session
   session::FrameRef frame_in_flight_;
   FrameEncoder encoder_;
   std::vector<boost::asio::const_buffer> frame_buffers_;
   bool writing_ = false;
   bool close_after_writes_ = false;
   bool closed_ = false;
-  // Closed, or a fatal Error is on its way: the sim thread's offers are dropped.
-  std::atomic<bool> closing_{false};
   std::atomic<bool> pump_posted_{false};
 };
 

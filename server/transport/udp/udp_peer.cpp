@@ -45,35 +45,19 @@ UdpPeer::UdpPeer(session::ClientId client, const PeerAddress& address, const ses
       last_heard_(now),
       chunker_(max_datagram_bytes) {}
 
-void UdpPeer::Start() { protocol_ = std::make_unique<session::ClientProtocol>(client_, context_, shared_from_this(), mailbox_); }
-
-void UdpPeer::OfferFrame(const session::FrameRef& frame) {
-  if (closed_) return;
-  mailbox_.Offer(frame);
-  wakeup_->Notify();
-}
-
-void UdpPeer::OfferReply(proto::Envelope reply) {
-  if (closed_) return;  // unregistered: nobody to answer
-  offered_replies_.Offer(std::move(reply));
-  wakeup_->Notify();
+void UdpPeer::Start() {
+  session_ = session::ClientSession::Create(client_, context_, [wakeup = wakeup_] { wakeup->Notify(); });
 }
 
 bool UdpPeer::NextFrame() {
-  while (!frame_in_flight_) {
-    session::FrameRef frame = mailbox_.Take();
-    if (!frame) return false;
-    // A frame of the camera this client subscribed to before a re-subscribe is stale.
-    if (!protocol_->subscribed() || frame->camera_index != protocol_->camera_index()) continue;
-    encoder_.Encode(*frame, frame->camera_name, protocol_->subscription(), protocol_->with_state(),
-                    mailbox_.dropped(), false);
-    chunker_.Start(frame->frame_id, encoder_.segments(), encoder_.total_size());
-    frame_in_flight_ = std::move(frame);
-    next_chunk_ = 0;
-  }
-  // Before the first chunk: a reply offered before this frame may have
-  // arrived since the transport's last look, and it goes first.
-  return next_chunk_ > 0 || !offered_replies_.pending();
+  if (frame_in_flight_) return true;
+  session::FrameRef frame = session_->NextFrame();
+  if (!frame) return false;  // none, or a reply offered before it goes first (the transport's next turn)
+  encoder_.Encode(*frame, *session_, false);
+  chunker_.Start(frame->frame_id, encoder_.segments(), encoder_.total_size());
+  frame_in_flight_ = std::move(frame);
+  next_chunk_ = 0;
+  return true;
 }
 
 bool UdpPeer::Advance(uint32_t count) {
@@ -90,15 +74,12 @@ void UdpPeer::AbandonFrame() {
 void UdpPeer::EndFrame() {
   frame_in_flight_.reset();
   next_chunk_ = 0;
-  protocol_->OnFrameSent();  // sent or lost: either way a lockstep client may Step again
+  session_->FrameDone();  // sent or lost: either way a lockstep client may Step again
 }
 
 void UdpPeer::Close(bool disconnect) {
-  if (closed_.exchange(true)) return;
-  if (disconnect) protocol_->Disconnect();
-  protocol_.reset();  // breaks the peer -> protocol -> peer cycle
   frame_in_flight_.reset();
-  mailbox_.Reset(proto::DELIVERY_NEWEST);  // release frames back to the pool now
+  if (session_) session_->Close(disconnect);
 }
 
 }  // namespace sim4cv::transport

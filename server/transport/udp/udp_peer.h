@@ -1,8 +1,9 @@
-// One registered UDP client: its ClientProtocol (the same rules as TCP), its
-// frame mailbox, the frame being cut into chunks, and the UDP-only state
-// (sequence filter, last time heard from, Error rate limit). Lives on the
-// transport's thread, except OfferFrame and OfferReply, which the sim thread
-// calls.
+// One registered UDP client: its session::ClientSession (the same rules as
+// TCP: protocol, frames and the sim thread's replies), the frame being cut
+// into chunks, and the UDP-only state (sequence filter, last time heard
+// from, Error rate limit, replies that met a full send buffer). Lives on the
+// transport's thread; the sim thread only offers to the session, which
+// wakes that thread through the Wakeup.
 #pragma once
 
 #include <atomic>
@@ -11,8 +12,7 @@
 #include <memory>
 #include <vector>
 
-#include "server/session/client_protocol.h"
-#include "server/session/offered_replies.h"
+#include "server/session/client_session.h"
 #include "server/transport/frame_encoding.h"
 #include "server/transport/udp/frame_chunker.h"
 #include "server/transport/udp/rate_limiter.h"
@@ -41,26 +41,22 @@ class Wakeup {
   std::atomic<bool> pending_{false};
 };
 
-class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<UdpPeer> {
+class UdpPeer {
  public:
   using Clock = std::chrono::steady_clock;
 
   UdpPeer(session::ClientId client, const PeerAddress& address, const session::ServerContext& context,
           std::shared_ptr<Wakeup> wakeup, std::size_t max_datagram_bytes, Clock::time_point now);
 
-  // Creates the ClientProtocol; once, right after make_shared.
+  // Creates the session; once, before anything else.
   void Start();
 
-  void OfferFrame(const session::FrameRef& frame) override;
-  // Queued for the transport's thread (woken), which sends it as one datagram
-  // the way it sends ClientProtocol's replies.
-  void OfferReply(proto::Envelope reply) override;
-  // Transport thread: the offered replies, oldest first, into `out` (cleared first).
-  void TakeOfferedReplies(std::vector<proto::Envelope>& out) { offered_replies_.TakeAll(out); }
+  // Transport thread: the sim thread's replies, oldest first, into `out` (cleared first).
+  void TakeOfferedReplies(std::vector<proto::Envelope>& out) { session_->TakeReplies(out); }
 
   session::ClientId client() const { return client_; }
   const PeerAddress& address() const { return address_; }
-  session::ClientProtocol& protocol() { return *protocol_; }
+  session::ClientProtocol& protocol() { return session_->protocol(); }
   SequenceFilter& sequence() { return sequence_; }
   RateLimiter& error_limit() { return error_limit_; }
 
@@ -87,10 +83,8 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   void AbandonFrame();
 
   // Forgets the client: tells the sim thread (if `disconnect`; a client
-  // whose Hello was refused never reached it) and releases its frames and
-  // its ClientProtocol, which holds a reference back to this peer. Nothing
-  // but OfferFrame and OfferReply (which then drop what they get) may be
-  // called afterwards.
+  // whose Hello was refused never reached it) and releases its frames.
+  // Nothing may be called afterwards (the sim thread's offers are dropped).
   void Close(bool disconnect);
 
  private:
@@ -100,10 +94,7 @@ class UdpPeer : public session::ClientLink, public std::enable_shared_from_this<
   PeerAddress address_;
   const session::ServerContext& context_;
   std::shared_ptr<Wakeup> wakeup_;
-  std::unique_ptr<session::ClientProtocol> protocol_;
-  session::FrameMailbox mailbox_;
-  session::OfferedReplies offered_replies_;
-  std::atomic<bool> closed_{false};
+  std::shared_ptr<session::ClientSession> session_;
 
   SequenceFilter sequence_;
   RateLimiter error_limit_;
