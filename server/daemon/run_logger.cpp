@@ -10,17 +10,12 @@
 namespace sim4cv::daemon {
 namespace {
 
-uint16_t ObjectClassOf(sim::AgentKind kind) {
-  switch (kind) {
-    case sim::AgentKind::kCar:
-      return runlog::kObjectClassCar;
-    case sim::AgentKind::kUav:
-      return runlog::kObjectClassUav;
-    case sim::AgentKind::kPedestrian:
-      return runlog::kObjectClassPedestrian;
-  }
-  return 0;
-}
+static_assert(sim::InfoOf(sim::AgentKind::kCar).log_class == runlog::kObjectClassCar &&
+              sim::InfoOf(sim::AgentKind::kUav).log_class == runlog::kObjectClassUav &&
+              sim::InfoOf(sim::AgentKind::kPedestrian).log_class == runlog::kObjectClassPedestrian,
+              "the agent kinds' run-log classes (sim/agent_kinds.h) are the log format's");
+
+uint16_t ObjectClassOf(sim::AgentKind kind) { return sim::InfoOf(kind).log_class; }
 
 runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, const sim::State& initial) {
   runlog::RunLogHeader header;

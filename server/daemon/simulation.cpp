@@ -208,7 +208,8 @@ const sim::Agent& Simulation::AgentOf(uint32_t id, const char* what) const {
 
 uint32_t Simulation::Spawn(const proto::Spawn& spawn) {
   sim::SpawnPose pose{{spawn.position().x(), spawn.position().y(), spawn.position().z()}, spawn.yaw_deg() * kDegrees};
-  const auto kind = static_cast<sim::AgentKind>(spawn.kind());  // CheckConfigure let only the three kinds through
+  // CheckConfigure let only the table's kinds through (session/agent_kinds_wire.h).
+  const auto kind = static_cast<sim::AgentKind>(spawn.kind());
   if (spawn.snap_to_lane() && kind == sim::AgentKind::kCar) {
     if (!scene_->road_graph) {
       throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,

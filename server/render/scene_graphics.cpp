@@ -10,6 +10,7 @@
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
 #include "server/render/traffic_meshes.h"
+#include "server/session/agent_kinds_wire.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/gimbal.h"
 #include "server/sim/world.h"
@@ -112,21 +113,18 @@ void SceneGraphics::Update(const sim::State& state) {
     // inside; a pedestrian's body stands on its feet, its box half its height up.
     Eigen::Vector3d box_centre = agent.body.position, half_extents;
     MeshId mesh = 0;
-    uint32_t object_class = 0;
+    const uint32_t object_class = session::ObjectClassOf(agent.kind);
     switch (agent.kind) {
       case sim::AgentKind::kCar:
         mesh = agent.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;
-        object_class = proto::OBJECT_CLASS_CAR;
         half_extents = scene_.car.params.chassis_half_extents;
         break;
       case sim::AgentKind::kUav:
         mesh = uav_mesh_;
-        object_class = proto::OBJECT_CLASS_UAV;
         half_extents = scene_.uav.params.half_extents;
         break;
       case sim::AgentKind::kPedestrian:
         mesh = pedestrian_mesh_;
-        object_class = proto::OBJECT_CLASS_PEDESTRIAN;
         half_extents = kPedestrianBox;
         box_centre.z() += kPedestrianBox.z();
         break;

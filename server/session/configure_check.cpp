@@ -6,6 +6,7 @@
 
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
+#include "server/session/agent_kinds_wire.h"
 
 namespace sim4cv::session {
 namespace {
@@ -102,10 +103,8 @@ std::string CheckLoadMap(const proto::LoadMap& load) {
 
 std::string CheckSpawn(const proto::Spawn& spawn) {
   return Checker()
-      .True(spawn.kind() == proto::ENTITY_KIND_CAR || spawn.kind() == proto::ENTITY_KIND_UAV ||
-                spawn.kind() == proto::ENTITY_KIND_PEDESTRIAN,
-            "Spawn.kind is " + std::to_string(spawn.kind()) +
-                "; use ENTITY_KIND_CAR (1), ENTITY_KIND_UAV (2) or ENTITY_KIND_PEDESTRIAN (3)")
+      .True(sim::FindAgentKind(spawn.kind()) != nullptr,
+            "Spawn.kind is " + std::to_string(spawn.kind()) + "; use " + AgentKindChoices())
       .Name("Spawn.name", spawn.name(), true)
       .Vec("Spawn.position", spawn.position())
       .Finite("Spawn.yaw_deg", spawn.yaw_deg())

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "server/sim/agent_kinds.h"
 #include "server/sim/traffic/traffic_state.h"
 
 namespace sim4cv::sim {
@@ -48,8 +49,6 @@ struct UavOrder {
   double yaw_rate = 0.0;                               // kVelocity, rad/s
 };
 
-// Values of the protocol's EntityKind (sim4cv.proto).
-enum class AgentKind : uint8_t { kCar = 1, kUav = 2, kPedestrian = 3 };
 
 // One simulated vehicle or person: the scene's target car and camera UAV,
 // and any a client spawned. Its id is also its instance id in masks and boxes.

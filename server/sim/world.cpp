@@ -35,17 +35,7 @@ void Follow(const BodyState* logged, BodyState& body) {
   }
 }
 
-const char* KindName(AgentKind kind) {
-  switch (kind) {
-    case AgentKind::kCar:
-      return "car";
-    case AgentKind::kUav:
-      return "UAV";
-    case AgentKind::kPedestrian:
-      return "pedestrian";
-  }
-  return "?";
-}
+std::string_view KindName(AgentKind kind) { return InfoOf(kind).name; }
 
 // The set speed a car (at most 40 m/s) or a pedestrian (10 m/s) may be given.
 void CheckSpeed(AgentKind kind, float speed) {
