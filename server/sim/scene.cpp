@@ -10,7 +10,7 @@
 #include "server/common/check.h"
 #include "server/common/limits.h"
 #include "server/common/regular_file.h"
-#include "server/sim/closed_path.h"
+#include "server/sim/vehicles/polyline.h"
 #include "server/sim/map/map_text.h"
 
 namespace sim4cv::sim {
@@ -120,7 +120,7 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
   std::vector<Eigen::Vector2d> road;
   for (const auto& p : scene.road_loop) road.push_back(p.cast<double>());
   // Right-hand traffic: the car drives the lane half a lane to the right of the centre line.
-  scene.car_lane = ClosedPath::Offset(road, scene.lane_width / 2.0).points();
+  scene.car_lane = vehicles::OffsetLoop(road, scene.lane_width / 2.0);
   return scene;
 }
 

@@ -103,7 +103,7 @@ struct World::Bodies {
   }
 };
 
-World::World(const Scene& scene) : scene_(scene), car_lane_(scene.car_lane), bodies_(std::make_unique<Bodies>()) {
+World::World(const Scene& scene) : scene_(scene), car_lane_(scene.car_lane, /*closed=*/true), bodies_(std::make_unique<Bodies>()) {
   auto& b = *bodies_;
   b.world.setGravity(btVector3(0, 0, -9.81));
   b.AddStatic(std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0), btTransform::getIdentity());

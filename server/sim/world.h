@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "server/sim/closed_path.h"
+#include "server/sim/vehicles/polyline.h"
 #include "server/sim/scene.h"
 #include "server/sim/state.h"
 #include "server/sim/vehicles/polyline.h"
@@ -84,7 +84,7 @@ class World {
   void SetReplay(std::shared_ptr<const runlog::ReplayTrack> track, std::vector<uint32_t> only = {});
 
   // The lane the scene's target car drives (right lane of its road loop).
-  const ClosedPath& car_lane() const { return car_lane_; }
+  const vehicles::Polyline& car_lane() const { return car_lane_; }
 
  private:
   struct Bodies;
@@ -107,7 +107,7 @@ class World {
   bool Replayed(uint32_t id) const;
 
   const Scene& scene_;
-  ClosedPath car_lane_;
+  vehicles::Polyline car_lane_;
   std::unique_ptr<Bodies> bodies_;
   State initial_state_;  // taken when the scene's bodies were spawned
   std::shared_ptr<const runlog::ReplayTrack> replay_;

@@ -58,8 +58,8 @@ TEST_F(WorldTest, InitialStateIsOnTheLaneAndOnStation) {
   // counter-clockwise default loop, outward, so it is longer than the road.
   std::vector<Eigen::Vector2d> road;
   for (const auto& p : scene_.road_loop) road.push_back(p.cast<double>());
-  EXPECT_GT(world.car_lane().length(), ClosedPath(road).length());
-  const auto on_road = ClosedPath(road).Project(CarOf(state).body.position.head<2>());
+  EXPECT_GT(world.car_lane().length(), vehicles::Polyline(road, true).length());
+  const auto on_road = vehicles::Polyline(road, true).Project(CarOf(state).body.position.head<2>());
   // Half a lane, a little more at a bend (the corner point moves along the
   // bisector, by offset / cos(half the turn)).
   EXPECT_NEAR((on_road.point - CarOf(state).body.position.head<2>()).norm(), scene_.lane_width / 2.0, 0.01);

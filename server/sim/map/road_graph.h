@@ -67,7 +67,7 @@ struct SampledPath {
   std::vector<double> arc_length;  // exact arc length along the lanes at each point, from points[0]
   std::vector<double> heading;     // direction of travel at each point, radians
   double length = 0.0;  // of the whole path; closed: including the stretch from the last point back to the first
-  bool closed = false;  // closed: the first point is not repeated at the end (as ClosedPath wants)
+  bool closed = false;  // closed: the first point is not repeated at the end (as a closed Polyline wants)
 };
 
 class RoadGraph {

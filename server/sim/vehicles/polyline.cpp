@@ -82,4 +82,27 @@ Eigen::Vector2d Polyline::PointAt(double s) const {
   return a + t * (SegmentEnd(i) - a);
 }
 
+Eigen::Vector2d Polyline::TangentAt(double s) const {
+  const std::size_t i = SegmentAt(Wrap(s));
+  return (SegmentEnd(i) - points_[i]).normalized();
+}
+
+std::vector<Eigen::Vector2d> OffsetLoop(const std::vector<Eigen::Vector2d>& centre_line, double offset) {
+  const std::size_t n = centre_line.size();
+  SIM4CV_THROW_UNLESS(n >= 3, "a closed path needs at least 3 points, got " << n);
+  std::vector<Eigen::Vector2d> shifted;
+  shifted.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    // Average the directions of the two segments meeting here, so corners
+    // shift along their bisector.
+    const Eigen::Vector2d in = (centre_line[i] - centre_line[(i + n - 1) % n]).normalized();
+    const Eigen::Vector2d out = (centre_line[(i + 1) % n] - centre_line[i]).normalized();
+    const Eigen::Vector2d direction = (in + out).normalized();
+    const Eigen::Vector2d right(direction.y(), -direction.x());
+    const double miter = 1.0 / std::max(0.5, right.dot(Eigen::Vector2d(out.y(), -out.x())));
+    shifted.push_back(centre_line[i] + right * offset * miter);
+  }
+  return shifted;
+}
+
 }  // namespace sim4cv::vehicles

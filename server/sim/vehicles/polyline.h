@@ -1,7 +1,5 @@
 // A 2D polyline parameterised by arc length, open or closed: the path the
-// car's driver follows. (Like server/sim/ClosedPath, which it may replace,
-// but also open; the vehicles library cannot depend on sim4cv_sim, which is
-// what will link it.)
+// car's driver follows, and the scene's closed lane loop.
 #pragma once
 
 #include <Eigen/Core>
@@ -9,6 +7,11 @@
 #include <vector>
 
 namespace sim4cv::vehicles {
+
+// A closed loop's points shifted sideways by `offset` metres (positive: to
+// the right of the driving direction), e.g. the right lane's centre from the
+// road's; corners move along their bisector, so sides stay parallel.
+std::vector<Eigen::Vector2d> OffsetLoop(const std::vector<Eigen::Vector2d>& centre_line, double offset);
 
 class Polyline {
  public:
@@ -31,6 +34,8 @@ class Polyline {
   // The point at arc length `s`. Closed: wraps around. Open: continues
   // straight beyond either end, so a lookahead past the end stays defined.
   Eigen::Vector2d PointAt(double s) const;
+  // Unit tangent (driving direction) at arc length `s`.
+  Eigen::Vector2d TangentAt(double s) const;
 
   double length() const { return cumulative_.back(); }
   bool closed() const { return closed_; }

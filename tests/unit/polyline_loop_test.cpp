@@ -1,5 +1,5 @@
-// Unit tests of ClosedPath (server/sim/closed_path.*) on a 10 m square.
-#include "server/sim/closed_path.h"
+// Unit tests of Polyline as a closed loop and OffsetLoop (server/sim/vehicles/polyline.*) on a 10 m square.
+#include "server/sim/vehicles/polyline.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 
 #include "tests/support/no_warnings.h"
 
-namespace sim4cv::sim {
+namespace sim4cv::vehicles {
 namespace {
 
 using Eigen::Vector2d;
@@ -26,7 +26,7 @@ void ExpectNear(const Vector2d& actual, const Vector2d& expected, double tol = k
 
 std::string ConstructionError(std::vector<Vector2d> points) {
   try {
-    ClosedPath path(std::move(points));
+    Polyline path(std::move(points), true);
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
@@ -34,15 +34,15 @@ std::string ConstructionError(std::vector<Vector2d> points) {
   return {};
 }
 
-TEST(ClosedPathTest, LengthAndPoints) {
-  const ClosedPath path(Square());
+TEST(LoopTest, LengthAndPoints) {
+  const Polyline path(Square(), true);
   EXPECT_NEAR(path.length(), 40.0, kTol);
   ASSERT_EQ(path.points().size(), 4u);
   ExpectNear(path.points()[2], {10, 10});
 }
 
-TEST(ClosedPathTest, PointAtWithinTheLoop) {
-  const ClosedPath path(Square());
+TEST(LoopTest, PointAtWithinTheLoop) {
+  const Polyline path(Square(), true);
   ExpectNear(path.PointAt(0), {0, 0});
   ExpectNear(path.PointAt(5), {5, 0});
   ExpectNear(path.PointAt(10), {10, 0});
@@ -52,8 +52,8 @@ TEST(ClosedPathTest, PointAtWithinTheLoop) {
   ExpectNear(path.PointAt(39.999), {0, 0.001}, 1e-6);
 }
 
-TEST(ClosedPathTest, PointAtWraps) {
-  const ClosedPath path(Square());
+TEST(LoopTest, PointAtWraps) {
+  const Polyline path(Square(), true);
   ExpectNear(path.PointAt(40), {0, 0});
   ExpectNear(path.PointAt(45), {5, 0});
   ExpectNear(path.PointAt(40 * 3 + 15), {10, 5});
@@ -62,8 +62,8 @@ TEST(ClosedPathTest, PointAtWraps) {
   ExpectNear(path.PointAt(-40 * 2 - 12.5), {2.5, 10});
 }
 
-TEST(ClosedPathTest, TangentAt) {
-  const ClosedPath path(Square());
+TEST(LoopTest, TangentAt) {
+  const Polyline path(Square(), true);
   ExpectNear(path.TangentAt(5), {1, 0});
   ExpectNear(path.TangentAt(15), {0, 1});
   ExpectNear(path.TangentAt(25), {-1, 0});
@@ -73,8 +73,8 @@ TEST(ClosedPathTest, TangentAt) {
   EXPECT_NEAR(path.TangentAt(12.3).norm(), 1.0, kTol);
 }
 
-TEST(ClosedPathTest, ProjectOntoEachSide) {
-  const ClosedPath path(Square());
+TEST(LoopTest, ProjectOntoEachSide) {
+  const Polyline path(Square(), true);
   struct Case {
     Vector2d p;
     std::size_t segment;
@@ -92,28 +92,27 @@ TEST(ClosedPathTest, ProjectOntoEachSide) {
   for (const Case& c : cases) {
     SCOPED_TRACE(::testing::Message() << "p = " << c.p.transpose());
     const auto projection = path.Project(c.p);
-    EXPECT_EQ(projection.segment, c.segment);
     EXPECT_NEAR(projection.arc_length, c.arc_length, kTol);
     ExpectNear(projection.point, c.point);
     ExpectNear(path.PointAt(projection.arc_length), projection.point);
   }
 }
 
-TEST(ClosedPathTest, ProjectOutsideACornerLandsOnTheCorner) {
-  const ClosedPath path(Square());
+TEST(LoopTest, ProjectOutsideACornerLandsOnTheCorner) {
+  const Polyline path(Square(), true);
   const auto projection = path.Project({13, 14});
   ExpectNear(projection.point, {10, 10});
   EXPECT_NEAR(projection.arc_length, 20.0, kTol);
 }
 
-TEST(ClosedPathTest, OffsetToTheRightOfACounterClockwiseLoopMovesOutward) {
+TEST(LoopTest, OffsetToTheRightOfACounterClockwiseLoopMovesOutward) {
   const double offset = 2.0;
-  const ClosedPath shifted = ClosedPath::Offset(Square(), offset);
+  const Polyline shifted = Polyline(OffsetLoop(Square(), offset), true);
   const Vector2d centre(5, 5);
   // Midpoints of each side of the original square are 5 m from the centre;
   // the shifted loop's sides are 5 + offset away.
   for (double s : {5.0, 15.0, 25.0, 35.0}) {
-    const ClosedPath original(Square());
+    const Polyline original(Square(), true);
     const Vector2d midpoint = original.PointAt(s);
     const auto projection = shifted.Project(midpoint);
     EXPECT_NEAR((projection.point - midpoint).norm(), offset, 1e-9) << "side midpoint " << midpoint.transpose();
@@ -127,34 +126,34 @@ TEST(ClosedPathTest, OffsetToTheRightOfACounterClockwiseLoopMovesOutward) {
   EXPECT_NEAR(shifted.length(), 4 * (10 + 2 * offset), 1e-9);
 }
 
-TEST(ClosedPathTest, NegativeOffsetMovesInward) {
-  const ClosedPath shifted = ClosedPath::Offset(Square(), -1.0);
+TEST(LoopTest, NegativeOffsetMovesInward) {
+  const Polyline shifted = Polyline(OffsetLoop(Square(), -1.0), true);
   ExpectNear(shifted.points()[0], {1, 1});
   ExpectNear(shifted.points()[2], {9, 9});
   EXPECT_NEAR(shifted.length(), 32.0, 1e-9);
 }
 
-TEST(ClosedPathTest, OffsetOfAClockwiseLoopMovesInward) {
+TEST(LoopTest, OffsetOfAClockwiseLoopMovesInward) {
   std::vector<Vector2d> clockwise = Square();
   std::reverse(clockwise.begin(), clockwise.end());
-  const ClosedPath shifted = ClosedPath::Offset(clockwise, 1.0);
+  const Polyline shifted = Polyline(OffsetLoop(clockwise, 1.0), true);
   EXPECT_NEAR(shifted.length(), 32.0, 1e-9);
 }
 
-TEST(ClosedPathTest, RejectsFewerThanThreePoints) {
+TEST(LoopTest, RejectsFewerThanThreePoints) {
   const std::string message = ConstructionError({{0, 0}, {1, 0}});
   EXPECT_NE(message.find("at least 3 points"), std::string::npos) << message;
   EXPECT_NE(message.find("got 2"), std::string::npos) << message;
   EXPECT_NE(ConstructionError({}).find("got 0"), std::string::npos);
   try {
-    ClosedPath::Offset({{0, 0}, {1, 0}}, 1.0);
+    OffsetLoop({{0, 0}, {1, 0}}, 1.0);
     ADD_FAILURE() << "Offset accepted 2 points";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("at least 3 points"), std::string::npos) << e.what();
   }
 }
 
-TEST(ClosedPathTest, RejectsCoincidentPoints) {
+TEST(LoopTest, RejectsCoincidentPoints) {
   const std::string message = ConstructionError({{0, 0}, {1, 0}, {1, 0}, {0, 1}});
   EXPECT_NE(message.find("points 1 and 2 coincide"), std::string::npos) << message;
   // The closing segment: the last point equals the first.
@@ -163,4 +162,4 @@ TEST(ClosedPathTest, RejectsCoincidentPoints) {
 }
 
 }  // namespace
-}  // namespace sim4cv::sim
+}  // namespace sim4cv::vehicles
