@@ -35,10 +35,10 @@ double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 double CarAndFourUavsRealTimeFactor(const sim::Scene& scene, int steps) {
   sim::World world(scene);
   sim::State state = world.InitialState();
-  const sim::Agent& camera_uav = *state.Find(sim::kUavEntityId);
+  const sim::Entity& camera_uav = *state.Find(sim::kUavEntityId);
   for (int i = 1; i < 4; ++i) {
     sim::SpawnPose pose{camera_uav.body.position + Eigen::Vector3d(3.0 * i, 0.0, 2.0 * i), camera_uav.body.Yaw()};
-    const uint32_t id = world.Spawn(state, sim::AgentKind::kUav, "", pose);
+    const uint32_t id = world.Spawn(state, sim::EntityKind::kUav, "", pose);
     sim::UavOrder follow = camera_uav.uav_order;
     follow.altitude += 2.0 * i;
     world.SetUavOrder(state, id, follow);

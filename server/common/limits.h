@@ -100,7 +100,7 @@ inline constexpr uint32_t kMaxAddedCameraHeight = 1080;
 inline constexpr std::size_t kMaxCameras = 32;
 inline constexpr std::size_t kMaxCameraIndices = 1024;
 
-// LoadMap.traffic: agents the map's traffic steps every frame.
+// LoadMap.traffic: entities the map's traffic steps every frame.
 inline constexpr uint32_t kMaxTrafficCars = 500;
 inline constexpr uint32_t kMaxTrafficParked = 2000;
 inline constexpr uint32_t kMaxTrafficPedestrians = 2000;

@@ -10,12 +10,12 @@
 namespace sim4cv::daemon {
 namespace {
 
-static_assert(sim::InfoOf(sim::AgentKind::kCar).log_class == runlog::kObjectClassCar &&
-              sim::InfoOf(sim::AgentKind::kUav).log_class == runlog::kObjectClassUav &&
-              sim::InfoOf(sim::AgentKind::kPedestrian).log_class == runlog::kObjectClassPedestrian,
-              "the agent kinds' run-log classes (sim/agent_kinds.h) are the log format's");
+static_assert(sim::InfoOf(sim::EntityKind::kCar).log_class == runlog::kObjectClassCar &&
+              sim::InfoOf(sim::EntityKind::kUav).log_class == runlog::kObjectClassUav &&
+              sim::InfoOf(sim::EntityKind::kPedestrian).log_class == runlog::kObjectClassPedestrian,
+              "the entity kinds' run-log classes (sim/entity_kinds.h) are the log format's");
 
-uint16_t ObjectClassOf(sim::AgentKind kind) { return sim::InfoOf(kind).log_class; }
+uint16_t ObjectClassOf(sim::EntityKind kind) { return sim::InfoOf(kind).log_class; }
 
 runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, const sim::State& initial) {
   runlog::RunLogHeader header;
@@ -28,8 +28,8 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   header.seed = config.seed;
   // The entities and cameras at the start; records hold every entity
   // present at their frame, so ones spawned later appear there by id.
-  for (const sim::Agent& agent : initial.agents) {
-    header.entities.push_back({agent.id, agent.name, static_cast<uint16_t>(agent.kind), ObjectClassOf(agent.kind)});
+  for (const sim::Entity& entity : initial.entities) {
+    header.entities.push_back({entity.id, entity.name, static_cast<uint16_t>(entity.kind), ObjectClassOf(entity.kind)});
   }
   // Traffic (docs/maps.md, "Traffic"): every moving car and walker, so that
   // a replay shows it where it was.
@@ -43,7 +43,7 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
                                runlog::kObjectClassPedestrian});
   }
   for (const auto& camera : scene.cameras) {
-    const sim::Agent* mount = initial.FindByName(camera.mounted_on);
+    const sim::Entity* mount = initial.FindByName(camera.mounted_on);
     header.cameras.push_back({camera.name, mount ? mount->id : 0u, camera.width, camera.height});
   }
   return header;
@@ -70,7 +70,7 @@ void RunLogger::Append(const sim::State& state, const session::Scheduler& schedu
     const auto start = std::chrono::steady_clock::now();
     record_.frame_id = state.frame_id;
     record_.sim_time = state.sim_time;
-    for (const sim::Agent& agent : state.agents) record_.entities.push_back({agent.id, agent.body});
+    for (const sim::Entity& entity : state.entities) record_.entities.push_back({entity.id, entity.body});
     for (std::size_t i = 0; i < state.traffic.cars.size(); ++i) {
       record_.entities.push_back({traffic_ids_.cars + static_cast<uint32_t>(i), sim::BodyOf(state.traffic.cars[i])});
     }
@@ -84,8 +84,8 @@ void RunLogger::Append(const sim::State& state, const session::Scheduler& schedu
       const std::optional<uint32_t> camera = scheduler.CameraOf(report.client_id);
       record_.tracker_boxes.push_back({camera ? static_cast<uint16_t>(*camera) : runlog::kNoCamera, report});
     }
-    for (const sim::Agent& agent : state.agents) {
-      if (agent.kind == sim::AgentKind::kCar) record_.controls.push_back({agent.id, agent.car_command});
+    for (const sim::Entity& entity : state.entities) {
+      if (entity.kind == sim::EntityKind::kCar) record_.controls.push_back({entity.id, entity.car_command});
     }
     try {
       writer_->Append(record_);

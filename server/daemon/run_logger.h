@@ -47,7 +47,7 @@ class RunLogger final : public session::ClientLink {
   void Fail(const std::exception& error);
 
   session::Counters& counters_;
-  traffic::TrafficIds traffic_ids_;               // the map traffic's entity ids, logged with the agents
+  traffic::TrafficIds traffic_ids_;               // the map traffic's entity ids, logged with the entities
   std::unique_ptr<runlog::RunLogWriter> writer_;  // null once closed or failed
   runlog::FrameLogRecord record_;                 // reused: no allocation per frame once warm
   int64_t append_ns_ = 0;                         // time spent in Append, for the closing line

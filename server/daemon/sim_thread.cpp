@@ -199,14 +199,14 @@ void SimThread::Subscribe(session::ClientId client, session::SubscribeCommand& s
 }
 
 void SimThread::ApplyControls(session::ControlsCommand& controls) {
-  sim::Agent* car = sim_.state().Find(controls.entity_id);
-  if (car && car->kind == sim::AgentKind::kCar) {
+  sim::Entity* car = sim_.state().Find(controls.entity_id);
+  if (car && car->kind == sim::EntityKind::kCar) {
     car->car_command = {controls.steering, controls.throttle, controls.brake, true};
     return;
   }
   OfferError(controls.link.get(), proto::ERROR_CODE_UNKNOWN_ENTITY,
              "Controls.entity_id " + std::to_string(controls.entity_id) + " is not a car; the world holds " +
-                 sim::AgentList(sim_.state()));
+                 sim::EntityList(sim_.state()));
 }
 
 // Any exception out of carrying out a request becomes that client's Error,

@@ -196,21 +196,21 @@ void Simulation::RefuseWhileLogging(const char* request, const char* why) const 
                            config_.log_file + ": " + why + "; start another sim4cvd without --log for this");
 }
 
-const sim::Agent& Simulation::AgentOf(uint32_t id, const char* what) const {
-  const sim::Agent* agent = state_.Find(id);
-  if (!agent) {
+const sim::Entity& Simulation::EntityOf(uint32_t id, const char* what) const {
+  const sim::Entity* entity = state_.Find(id);
+  if (!entity) {
     throw ConfigureError(
         proto::ERROR_CODE_UNKNOWN_ENTITY,
-        std::string(what) + ": no entity has id " + std::to_string(id) + "; the world holds " + sim::AgentList(state_));
+        std::string(what) + ": no entity has id " + std::to_string(id) + "; the world holds " + sim::EntityList(state_));
   }
-  return *agent;
+  return *entity;
 }
 
 uint32_t Simulation::Spawn(const proto::Spawn& spawn) {
   sim::SpawnPose pose{{spawn.position().x(), spawn.position().y(), spawn.position().z()}, spawn.yaw_deg() * kDegrees};
-  // CheckConfigure let only the table's kinds through (session/agent_kinds_wire.h).
-  const auto kind = static_cast<sim::AgentKind>(spawn.kind());
-  if (spawn.snap_to_lane() && kind == sim::AgentKind::kCar) {
+  // CheckConfigure let only the table's kinds through (session/entity_kinds_wire.h).
+  const auto kind = static_cast<sim::EntityKind>(spawn.kind());
+  if (spawn.snap_to_lane() && kind == sim::EntityKind::kCar) {
     if (!scene_->road_graph) {
       throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
                            "Spawn.snap_to_lane needs a map scene; scene '" + scene_->name + "' has no lanes");
@@ -223,7 +223,7 @@ uint32_t Simulation::Spawn(const proto::Spawn& spawn) {
 }
 
 void Simulation::RemoveEntity(uint32_t id, Change& change) {
-  const std::string name = AgentOf(id, "Remove").name;
+  const std::string name = EntityOf(id, "Remove").name;
   Checked([&] { world_->Remove(state_, id); });
   for (std::size_t i = 0; i < cameras_.size(); ++i) {
     if (cameras_[i].name.empty() || cameras_[i].mounted_on != name) continue;
@@ -233,7 +233,7 @@ void Simulation::RemoveEntity(uint32_t id, Change& change) {
 }
 
 void Simulation::SetRoute(const proto::SetRoute& route) {
-  AgentOf(route.entity_id(), "SetRoute");
+  EntityOf(route.entity_id(), "SetRoute");
   if (route.has_keep_route()) {
     Checked([&] { world_->SetCruiseSpeed(state_, route.entity_id(), route.speed()); });
     return;
@@ -261,13 +261,13 @@ void Simulation::SetRoute(const proto::SetRoute& route) {
 }
 
 void Simulation::CommandUav(const proto::CommandUav& command) {
-  AgentOf(command.entity_id(), "CommandUav");
+  EntityOf(command.entity_id(), "CommandUav");
   sim::UavOrder order;
   switch (command.order_case()) {
     case proto::CommandUav::kFollow:
       order.mode = sim::UavOrder::Mode::kFollow;
       order.target = command.follow().target_id();
-      AgentOf(order.target, "CommandUav.follow.target_id");
+      EntityOf(order.target, "CommandUav.follow.target_id");
       if (command.follow().altitude() > 0) order.altitude = command.follow().altitude();
       if (command.follow().pitch_down_deg() > 0) order.pitch_down_deg = command.follow().pitch_down_deg();
       break;
@@ -299,7 +299,7 @@ void Simulation::AddCamera(const proto::AddCamera& camera) {
   if (!camera.mounted_on().empty() && !state_.FindByName(camera.mounted_on())) {
     throw ConfigureError(proto::ERROR_CODE_UNKNOWN_ENTITY, "AddCamera.mounted_on: no entity is named '" +
                                                                camera.mounted_on() + "'; the world holds " +
-                                                               sim::AgentList(state_));
+                                                               sim::EntityList(state_));
   }
   sim::CameraSpec spec;
   spec.name = camera.name();
@@ -363,11 +363,11 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   out.Clear();
   out.set_scene_name(scene_->name);
   out.set_frame_id(state_.frame_id);
-  for (const sim::Agent& agent : state_.agents) {
+  for (const sim::Entity& entity : state_.entities) {
     proto::EntityInfo* info = out.add_entities();
-    info->set_id(agent.id);
-    info->set_name(agent.name);
-    info->set_kind(static_cast<proto::EntityKind>(agent.kind));
+    info->set_id(entity.id);
+    info->set_name(entity.name);
+    info->set_kind(static_cast<proto::EntityKind>(entity.kind));
   }
   for (const sim::CameraSpec& camera : cameras_) {
     proto::CameraInfo* info = out.add_cameras();

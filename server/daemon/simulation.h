@@ -76,7 +76,7 @@ class Simulation {
   void RemoveEntity(uint32_t id, Change& change);
   void LoadMap(const proto::LoadMap& load, Change& change);
   void QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult& out) const;
-  const sim::Agent& AgentOf(uint32_t id, const char* what) const;
+  const sim::Entity& EntityOf(uint32_t id, const char* what) const;
   // The traffic a LoadMap asks for: its settings, else the daemon's flags.
   traffic::TrafficConfig TrafficFor(const proto::LoadMap& load) const;
   // Throws INVALID_STATE naming --log if the daemon writes a run log.

@@ -12,15 +12,15 @@ void FillStateMessage(const sim::State& state, proto::State& out) {
   out.set_sim_time(state.sim_time);
   // Clear() keeps the repeated elements' memory, so the hot path reuses them.
   out.mutable_entities()->Clear();
-  for (const sim::Agent& agent : state.agents) {
-    proto::EntityState& entity = *out.add_entities();
-    entity.set_id(agent.id);
-    entity.set_name(agent.name);
-    entity.set_kind(static_cast<proto::EntityKind>(agent.kind));
-    SetVec3(agent.body.position, *entity.mutable_position());
-    SetQuaternion(agent.body.orientation, *entity.mutable_orientation());
-    SetVec3(agent.body.linear_velocity, *entity.mutable_linear_velocity());
-    SetVec3(agent.body.angular_velocity, *entity.mutable_angular_velocity());
+  for (const sim::Entity& entity : state.entities) {
+    proto::EntityState& message = *out.add_entities();
+    message.set_id(entity.id);
+    message.set_name(entity.name);
+    message.set_kind(static_cast<proto::EntityKind>(entity.kind));
+    SetVec3(entity.body.position, *message.mutable_position());
+    SetQuaternion(entity.body.orientation, *message.mutable_orientation());
+    SetVec3(entity.body.linear_velocity, *message.mutable_linear_velocity());
+    SetVec3(entity.body.angular_velocity, *message.mutable_angular_velocity());
   }
 }
 

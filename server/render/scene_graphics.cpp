@@ -10,7 +10,7 @@
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
 #include "server/render/traffic_meshes.h"
-#include "server/session/agent_kinds_wire.h"
+#include "server/session/entity_kinds_wire.h"
 #include "server/sim/vehicles/car.h"
 #include "server/sim/vehicles/gimbal.h"
 #include "server/sim/world.h"
@@ -95,8 +95,8 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   uav_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   meshes_.push_back(MakePedestrianMesh(0));
   pedestrian_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
-  // Agents take the ids below the static objects' (sim::kMaxAgentId).
-  instance_id_bound_ = sim::kMaxAgentId + 1;
+  // Entities take the ids below the static objects' (sim::kMaxEntityId).
+  instance_id_bound_ = sim::kMaxEntityId + 1;
   for (const auto& object : static_labelled_)
     instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, object.instance + 1u);
   if (traffic_) instance_id_bound_ = std::max<std::size_t>(instance_id_bound_, traffic_->id_bound());
@@ -107,32 +107,32 @@ void SceneGraphics::Update(const sim::State& state) {
   items_.resize(static_item_count_);
   labelled_.clear();
   moving_.clear();
-  for (const sim::Agent& agent : state.agents) {
-    const auto instance = static_cast<InstanceId>(agent.id);
+  for (const sim::Entity& entity : state.entities) {
+    const auto instance = static_cast<InstanceId>(entity.id);
     // The 3D box: the physics box, which the car's and the UAV's meshes fit
     // inside; a pedestrian's body stands on its feet, its box half its height up.
-    Eigen::Vector3d box_centre = agent.body.position, half_extents;
+    Eigen::Vector3d box_centre = entity.body.position, half_extents;
     MeshId mesh = 0;
-    const uint32_t object_class = session::ObjectClassOf(agent.kind);
-    switch (agent.kind) {
-      case sim::AgentKind::kCar:
-        mesh = agent.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;
+    const uint32_t object_class = session::ObjectClassOf(entity.kind);
+    switch (entity.kind) {
+      case sim::EntityKind::kCar:
+        mesh = entity.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;
         half_extents = scene_.car.params.chassis_half_extents;
         break;
-      case sim::AgentKind::kUav:
+      case sim::EntityKind::kUav:
         mesh = uav_mesh_;
         half_extents = scene_.uav.params.half_extents;
         break;
-      case sim::AgentKind::kPedestrian:
+      case sim::EntityKind::kPedestrian:
         mesh = pedestrian_mesh_;
         half_extents = kPedestrianBox;
         box_centre.z() += kPedestrianBox.z();
         break;
     }
-    items_.push_back({mesh, BodyPose(agent.body), instance});
+    items_.push_back({mesh, BodyPose(entity.body), instance});
     labelled_.push_back({instance, object_class, 0});
-    moving_.push_back({instance, object_class, box_centre, agent.body.orientation, agent.body.linear_velocity,
-                       agent.body.angular_velocity, half_extents});
+    moving_.push_back({instance, object_class, box_centre, entity.body.orientation, entity.body.linear_velocity,
+                       entity.body.angular_velocity, half_extents});
   }
   labelled_.insert(labelled_.end(), static_labelled_.begin(), static_labelled_.end());
   if (traffic_) traffic_->Append(state.traffic, state.sim_time, items_, labelled_, moving_);
@@ -141,10 +141,10 @@ void SceneGraphics::Update(const sim::State& state) {
   previous_items_.reserve(items_.capacity());
 }
 
-// Items are rebuilt in the same order every frame (agents in State order,
+// Items are rebuilt in the same order every frame (entities in State order,
 // then traffic), so an item is matched with the one at its index a frame ago
 // if that drew the same mesh for the same instance; anything else (a new
-// agent, a reordering after a removal) gets no motion of its own.
+// entity, a reordering after a removal) gets no motion of its own.
 void SceneGraphics::LinkPreviousTransforms() {
   for (std::size_t i = static_item_count_; i < items_.size(); ++i) {
     DrawItem& item = items_[i];
@@ -155,7 +155,7 @@ void SceneGraphics::LinkPreviousTransforms() {
 }
 
 CameraView SceneGraphics::CameraAt(const sim::CameraSpec& spec, const sim::State& state) const {
-  const sim::Agent* mount = spec.mounted_on.empty() ? nullptr : state.FindByName(spec.mounted_on);
+  const sim::Entity* mount = spec.mounted_on.empty() ? nullptr : state.FindByName(spec.mounted_on);
   const vehicles::Pose body = mount ? vehicles::Pose{mount->body.position, mount->body.orientation} : vehicles::Pose{};
   vehicles::Pose camera;
   if (spec.gimbal) {

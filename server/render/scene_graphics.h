@@ -1,6 +1,6 @@
 // Turns the simulation's Scene and State into what the Renderer draws: the
 // meshes (built once), the static draw items, the labelled objects' 3D
-// ground truth, and per frame the agents' items and each camera's view.
+// ground truth, and per frame the entities' items and each camera's view.
 #pragma once
 
 #include <cstdint>
@@ -26,15 +26,15 @@ class SceneGraphics {
   // Brings everything that moves up to `state`: the draw items (with their
   // transforms of the previous Update, for optical flow), the labelled
   // objects and the moving objects' ground truth. Reuses its vectors: no
-  // allocation per frame once the number of agents stops growing.
+  // allocation per frame once the number of entities stops growing.
   void Update(const sim::State& state);
 
-  // Static items followed by the agents, as of the last Update.
+  // Static items followed by the entities, as of the last Update.
   const std::vector<DrawItem>& draw_items() const { return items_; }
   // Labelled objects (instance id, class) in instance-id order, as of the
   // last Update; the renderer fills in their unoccluded pixel counts.
   std::vector<LabelledObject>& labelled_objects() { return labelled_; }
-  // The agents' 3D boxes, poses and velocities, as of the last Update.
+  // The entities' 3D boxes, poses and velocities, as of the last Update.
   std::span<const MovingObject> moving_objects() const { return moving_; }
 
   // Class, pose and 3D box of every static labelled object (built once).

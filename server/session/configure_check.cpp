@@ -6,7 +6,7 @@
 
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
-#include "server/session/agent_kinds_wire.h"
+#include "server/session/entity_kinds_wire.h"
 
 namespace sim4cv::session {
 namespace {
@@ -103,8 +103,8 @@ std::string CheckLoadMap(const proto::LoadMap& load) {
 
 std::string CheckSpawn(const proto::Spawn& spawn) {
   return Checker()
-      .True(sim::FindAgentKind(spawn.kind()) != nullptr,
-            "Spawn.kind is " + std::to_string(spawn.kind()) + "; use " + AgentKindChoices())
+      .True(sim::FindEntityKind(spawn.kind()) != nullptr,
+            "Spawn.kind is " + std::to_string(spawn.kind()) + "; use " + EntityKindChoices())
       .Name("Spawn.name", spawn.name(), true)
       .Vec("Spawn.position", spawn.position())
       .Finite("Spawn.yaw_deg", spawn.yaw_deg())

@@ -28,7 +28,7 @@ vehicles::QuadcopterCommand UavCommandFor(const UavOrder& order, const BodyState
   using vehicles::QuadcopterCommand;
   switch (order.mode) {
     case UavOrder::Mode::kFollow:
-      if (const Agent* target = state.Find(order.target)) {
+      if (const Entity* target = state.Find(order.target)) {
         // The target's centripetal acceleration is fed forward so the UAV
         // does not lag in bends.
         const UavSetpoint station = FollowTarget(order, target->body);

@@ -163,14 +163,14 @@ traffic::TrafficIds TrafficIdsOf(const Scene& scene) {
 }
 
 void AddTraffic(Scene& scene, traffic::TrafficConfig config) {
-  const bool wants_agents = config.moving_cars > 0 || config.parked_cars > 0 || config.pedestrians > 0;
+  const bool wants_entities = config.moving_cars > 0 || config.parked_cars > 0 || config.pedestrians > 0;
   if (!scene.map) {
-    SIM4CV_THROW_UNLESS(!wants_agents, "traffic (--traffic-cars, --traffic-parked, --traffic-pedestrians) needs a "
+    SIM4CV_THROW_UNLESS(!wants_entities, "traffic (--traffic-cars, --traffic-parked, --traffic-pedestrians) needs a "
                                        "tile map (--map); scene '" << scene.name << "' has none");
     return;
   }
   config.traffic_lights = config.traffic_lights && scene.map->surroundings == map::Surroundings::kUrban;
-  if (!wants_agents && !config.traffic_lights) return;
+  if (!wants_entities && !config.traffic_lights) return;
   scene.traffic = std::make_shared<const traffic::TrafficPlan>(*scene.map, *scene.road_graph, config);
   SIM4CV_THROW_UNLESS(TrafficIdsOf(scene).end <= 65535, "map '" << scene.name << "' with this much traffic needs ids up to "
                                                                 << TrafficIdsOf(scene).end << "; the instance mask holds 65535");

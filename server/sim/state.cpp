@@ -6,17 +6,17 @@
 
 namespace sim4cv::sim {
 
-const Agent* State::Find(uint32_t id) const {
+const Entity* State::Find(uint32_t id) const {
   const auto at =
-      std::lower_bound(agents.begin(), agents.end(), id, [](const Agent& a, uint32_t wanted) { return a.id < wanted; });
-  return at != agents.end() && at->id == id ? &*at : nullptr;
+      std::lower_bound(entities.begin(), entities.end(), id, [](const Entity& a, uint32_t wanted) { return a.id < wanted; });
+  return at != entities.end() && at->id == id ? &*at : nullptr;
 }
 
-Agent* State::Find(uint32_t id) { return const_cast<Agent*>(std::as_const(*this).Find(id)); }
+Entity* State::Find(uint32_t id) { return const_cast<Entity*>(std::as_const(*this).Find(id)); }
 
-const Agent* State::FindByName(const std::string& name) const {
-  for (const Agent& agent : agents) {
-    if (agent.name == name) return &agent;
+const Entity* State::FindByName(const std::string& name) const {
+  for (const Entity& entity : entities) {
+    if (entity.name == name) return &entity;
   }
   return nullptr;
 }

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "server/sim/agent_kinds.h"
+#include "server/sim/entity_kinds.h"
 #include "server/sim/traffic/traffic_state.h"
 
 namespace sim4cv::sim {
@@ -53,9 +53,9 @@ struct UavOrder {
 // One simulated vehicle or person: the scene's target car and camera UAV,
 // and any a client spawned. Its id is also its instance id in masks and boxes.
 // Pedestrians are kinematic: they walk their route at cruise_speed.
-struct Agent {
+struct Entity {
   uint32_t id = 0;
-  AgentKind kind = AgentKind::kCar;
+  EntityKind kind = EntityKind::kCar;
   std::string name;
   BodyState body;
   CarCommand car_command;     // cars
@@ -76,14 +76,14 @@ struct State {
   uint64_t frame_id = 0;                       // frames completed; frame N is rendered after N frame periods
   uint64_t physics_steps = 0;                  // substeps taken since start
   double sim_time = 0.0;                       // seconds
-  std::vector<Agent> agents;                   // ordered by id
+  std::vector<Entity> entities;                   // ordered by id
   traffic::TrafficState traffic;               // the map's moving cars and walkers (empty without traffic)
   std::vector<TrackerReport> tracker_reports;  // one per client that reported, ordered by client id
 
-  // The agent with this id, or nullptr.
-  const Agent* Find(uint32_t id) const;
-  Agent* Find(uint32_t id);
-  const Agent* FindByName(const std::string& name) const;
+  // The entity with this id, or nullptr.
+  const Entity* Find(uint32_t id) const;
+  Entity* Find(uint32_t id);
+  const Entity* FindByName(const std::string& name) const;
 };
 
 }  // namespace sim4cv::sim

@@ -35,11 +35,11 @@ void Follow(const BodyState* logged, BodyState& body) {
   }
 }
 
-std::string_view KindName(AgentKind kind) { return InfoOf(kind).name; }
+std::string_view KindName(EntityKind kind) { return InfoOf(kind).name; }
 
 // The set speed a car (at most 40 m/s) or a pedestrian (10 m/s) may be given.
-void CheckSpeed(AgentKind kind, float speed) {
-  const bool walking = kind == AgentKind::kPedestrian;
+void CheckSpeed(EntityKind kind, float speed) {
+  const bool walking = kind == EntityKind::kPedestrian;
   const float most = walking ? 10.0f : 40.0f;
   SIM4CV_THROW_UNLESS(std::isfinite(speed) && speed >= 0 && speed <= most,
                       (walking ? "walking" : "car") << " speed " << speed << " m/s is outside [0, " << most << "]");
@@ -60,16 +60,16 @@ void PlaceWalker(const vehicles::Polyline& route, double walked, double speed, B
 
 }  // namespace
 
-std::string AgentList(const State& state) {
+std::string EntityList(const State& state) {
   std::ostringstream list;
-  for (const Agent& agent : state.agents) {
-    list << (&agent == &state.agents.front() ? "" : ", ") << agent.id << " ('" << agent.name << "', "
-         << KindName(agent.kind) << ")";
+  for (const Entity& entity : state.entities) {
+    list << (&entity == &state.entities.front() ? "" : ", ") << entity.id << " ('" << entity.name << "', "
+         << KindName(entity.kind) << ")";
   }
-  return state.agents.empty() ? "none" : list.str();
+  return state.entities.empty() ? "none" : list.str();
 }
 
-// The Bullet side of one agent, in the same order as State::agents.
+// The Bullet side of one entity, in the same order as State::entities.
 struct World::Vehicle {
   uint32_t id = 0;
   std::unique_ptr<vehicles::Car> car;
@@ -86,7 +86,7 @@ struct World::Bodies {
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &collision_config};
   std::vector<std::unique_ptr<btCollisionShape>> shapes;
   std::vector<std::unique_ptr<btRigidBody>> statics;
-  std::vector<Vehicle> vehicles;  // ordered by id, like State::agents
+  std::vector<Vehicle> vehicles;  // ordered by id, like State::entities
 
   void AddStatic(std::unique_ptr<btCollisionShape> shape, const btTransform& pose) {
     btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape.get());
@@ -124,11 +124,11 @@ World::World(const Scene& scene) : scene_(scene), car_lane_(scene.car_lane, /*cl
     }
   }
 
-  // The scene's own agents: the target car on its lane and the camera UAV filming it.
+  // The scene's own entities: the target car on its lane and the camera UAV filming it.
   const Eigen::Vector2d start = car_lane_.PointAt(0.0);
   const Eigen::Vector2d tangent = car_lane_.TangentAt(0.0);
   const double car_yaw = std::atan2(tangent.y(), tangent.x());
-  SIM4CV_DEMAND(Spawn(initial_state_, AgentKind::kCar, scene.car.name, {{start.x(), start.y(), 0.0}, car_yaw}) ==
+  SIM4CV_DEMAND(Spawn(initial_state_, EntityKind::kCar, scene.car.name, {{start.x(), start.y(), 0.0}, car_yaw}) ==
                 kCarEntityId);
   SetRoute(initial_state_, kCarEntityId, car_lane_.points(), true, scene.car.cruise_speed);
   UavOrder follow;
@@ -136,8 +136,8 @@ World::World(const Scene& scene) : scene_(scene), car_lane_(scene.car_lane, /*cl
   follow.altitude = scene.uav.altitude;
   const int uav_camera = scene.FindCamera("uav");
   follow.pitch_down_deg = uav_camera >= 0 ? scene.cameras[uav_camera].pitch_down_deg : 60.0;
-  const UavSetpoint station = FollowTarget(follow, initial_state_.agents.front().body);
-  SIM4CV_DEMAND(Spawn(initial_state_, AgentKind::kUav, scene.uav.name, {station.position, station.yaw}) ==
+  const UavSetpoint station = FollowTarget(follow, initial_state_.entities.front().body);
+  SIM4CV_DEMAND(Spawn(initial_state_, EntityKind::kUav, scene.uav.name, {station.position, station.yaw}) ==
                 kUavEntityId);
   SetUavOrder(initial_state_, kUavEntityId, follow);
   if (scene.traffic) initial_state_.traffic = traffic::InitialTraffic(*scene.traffic);
@@ -158,59 +158,59 @@ bool World::Replayed(uint32_t id) const {
   return replay_ && (replay_only_.empty() || std::binary_search(replay_only_.begin(), replay_only_.end(), id));
 }
 
-uint32_t World::Spawn(State& state, AgentKind kind, const std::string& name, const SpawnPose& pose) {
+uint32_t World::Spawn(State& state, EntityKind kind, const std::string& name, const SpawnPose& pose) {
   SIM4CV_THROW_UNLESS(pose.position.allFinite() && std::isfinite(pose.yaw),
                       "spawn pose (" << pose.position.transpose() << ", yaw " << pose.yaw << ") is not finite");
-  SIM4CV_THROW_UNLESS(kind != AgentKind::kUav || pose.position.z() >= 0.5,
+  SIM4CV_THROW_UNLESS(kind != EntityKind::kUav || pose.position.z() >= 0.5,
                       "a UAV must spawn in the air; z is " << pose.position.z() << " m (at least 0.5)");
   uint32_t id = 1;
-  for (const Agent& agent : state.agents) {  // ordered by id: the first gap is the lowest free id
-    if (agent.id != id) break;
+  for (const Entity& entity : state.entities) {  // ordered by id: the first gap is the lowest free id
+    if (entity.id != id) break;
     ++id;
   }
-  SIM4CV_THROW_UNLESS(id <= kMaxAgentId, "the world already holds " << kMaxAgentId << " agents, the most it can");
-  const std::string agent_name = name.empty() ? std::string(kind == AgentKind::kCar   ? "car_"
-                                                            : kind == AgentKind::kUav ? "uav_"
+  SIM4CV_THROW_UNLESS(id <= kMaxEntityId, "the world already holds " << kMaxEntityId << " entities, the most it can");
+  const std::string entity_name = name.empty() ? std::string(kind == EntityKind::kCar   ? "car_"
+                                                            : kind == EntityKind::kUav ? "uav_"
                                                                                       : "pedestrian_") +
                                                     std::to_string(id)
                                               : name;
-  SIM4CV_THROW_UNLESS(!state.FindByName(agent_name), "an entity named '" << agent_name << "' already exists");
+  SIM4CV_THROW_UNLESS(!state.FindByName(entity_name), "an entity named '" << entity_name << "' already exists");
 
   auto& b = *bodies_;
   Vehicle vehicle;
   vehicle.id = id;
-  Agent agent;
-  agent.id = id;
-  agent.kind = kind;
-  agent.name = agent_name;
-  if (kind == AgentKind::kCar) {
+  Entity entity;
+  entity.id = id;
+  entity.kind = kind;
+  entity.name = entity_name;
+  if (kind == EntityKind::kCar) {
     vehicle.car = std::make_unique<vehicles::Car>(b.world, scene_.car.params, pose.position.head<2>(), pose.yaw);
-    CopyState(vehicle.car->State(), agent.body);
-    agent.car_command = {0.0f, 0.0f, 1.0f, true};  // parked until told otherwise
-  } else if (kind == AgentKind::kPedestrian) {
+    CopyState(vehicle.car->State(), entity.body);
+    entity.car_command = {0.0f, 0.0f, 1.0f, true};  // parked until told otherwise
+  } else if (kind == EntityKind::kPedestrian) {
     // Kinematic: no Bullet body, it stands on the ground where it is put.
-    agent.body.position = {pose.position.x(), pose.position.y(), 0.0};
-    agent.body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()));
+    entity.body.position = {pose.position.x(), pose.position.y(), 0.0};
+    entity.body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()));
   } else {
     vehicle.uav = std::make_unique<vehicles::Quadcopter>(b.world, scene_.uav.params, pose.position, pose.yaw);
-    CopyState(vehicle.uav->State(), agent.body);
-    agent.uav_order.mode = UavOrder::Mode::kHold;
-    agent.uav_order.position = pose.position;
-    agent.uav_order.yaw = pose.yaw;
+    CopyState(vehicle.uav->State(), entity.body);
+    entity.uav_order.mode = UavOrder::Mode::kHold;
+    entity.uav_order.position = pose.position;
+    entity.uav_order.yaw = pose.yaw;
   }
-  const auto at = std::lower_bound(state.agents.begin(), state.agents.end(), id,
-                                   [](const Agent& a, uint32_t wanted) { return a.id < wanted; });
-  const auto index = at - state.agents.begin();
-  state.agents.insert(at, std::move(agent));
+  const auto at = std::lower_bound(state.entities.begin(), state.entities.end(), id,
+                                   [](const Entity& a, uint32_t wanted) { return a.id < wanted; });
+  const auto index = at - state.entities.begin();
+  state.entities.insert(at, std::move(entity));
   b.vehicles.insert(b.vehicles.begin() + index, std::move(vehicle));
   return id;
 }
 
-World::Vehicle& World::VehicleOf(const State& state, uint32_t id, AgentKind kind, const char* what) {
-  const Agent* agent = state.Find(id);
-  SIM4CV_THROW_UNLESS(agent, what << ": no entity has id " << id << "; the world holds " << AgentList(state));
-  SIM4CV_THROW_UNLESS(agent->kind == kind, what << ": entity " << id << " ('" << agent->name << "') is a "
-                                                << KindName(agent->kind) << ", not a " << KindName(kind));
+World::Vehicle& World::VehicleOf(const State& state, uint32_t id, EntityKind kind, const char* what) {
+  const Entity* entity = state.Find(id);
+  SIM4CV_THROW_UNLESS(entity, what << ": no entity has id " << id << "; the world holds " << EntityList(state));
+  SIM4CV_THROW_UNLESS(entity->kind == kind, what << ": entity " << id << " ('" << entity->name << "') is a "
+                                                << KindName(entity->kind) << ", not a " << KindName(kind));
   auto& vehicles = bodies_->vehicles;
   const auto it = std::lower_bound(vehicles.begin(), vehicles.end(), id,
                                    [](const Vehicle& v, uint32_t wanted) { return v.id < wanted; });
@@ -219,14 +219,14 @@ World::Vehicle& World::VehicleOf(const State& state, uint32_t id, AgentKind kind
 }
 
 void World::Remove(State& state, uint32_t id) {
-  const Agent* agent = state.Find(id);
-  SIM4CV_THROW_UNLESS(agent, "Remove: no entity has id " << id << "; the world holds " << AgentList(state));
-  VehicleOf(state, id, agent->kind, "Remove");
-  const auto index = agent - state.agents.data();
-  state.agents.erase(state.agents.begin() + index);
+  const Entity* entity = state.Find(id);
+  SIM4CV_THROW_UNLESS(entity, "Remove: no entity has id " << id << "; the world holds " << EntityList(state));
+  VehicleOf(state, id, entity->kind, "Remove");
+  const auto index = entity - state.entities.data();
+  state.entities.erase(state.entities.begin() + index);
   bodies_->vehicles.erase(bodies_->vehicles.begin() + index);
-  for (Agent& other : state.agents) {
-    if (other.kind == AgentKind::kUav && other.uav_order.mode == UavOrder::Mode::kFollow &&
+  for (Entity& other : state.entities) {
+    if (other.kind == EntityKind::kUav && other.uav_order.mode == UavOrder::Mode::kFollow &&
         other.uav_order.target == id) {
       other.uav_order.mode = UavOrder::Mode::kHold;
       other.uav_order.position = other.body.position;
@@ -236,62 +236,62 @@ void World::Remove(State& state, uint32_t id) {
 }
 
 void World::SetRoute(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed) {
-  const Agent* found = state.Find(id);
-  if (found && found->kind == AgentKind::kPedestrian) return SetWalk(state, id, std::move(path), closed, speed);
-  Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetRoute");
-  CheckSpeed(AgentKind::kCar, speed);
+  const Entity* found = state.Find(id);
+  if (found && found->kind == EntityKind::kPedestrian) return SetWalk(state, id, std::move(path), closed, speed);
+  Vehicle& vehicle = VehicleOf(state, id, EntityKind::kCar, "SetRoute");
+  CheckSpeed(EntityKind::kCar, speed);
   SIM4CV_THROW_UNLESS(path.size() >= 2, "a route needs at least 2 points; got " << path.size());
   vehicle.driver =
       std::make_unique<vehicles::CarDriver>(scene_.car.params, vehicles::Polyline(std::move(path), closed), speed);
-  Agent& agent = *state.Find(id);
-  agent.cruise_speed = speed;
-  agent.car_command.manual = false;
+  Entity& entity = *state.Find(id);
+  entity.cruise_speed = speed;
+  entity.car_command.manual = false;
 }
 
 void World::SetWalk(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed) {
-  Vehicle& vehicle = VehicleOf(state, id, AgentKind::kPedestrian, "SetRoute");
-  CheckSpeed(AgentKind::kPedestrian, speed);
+  Vehicle& vehicle = VehicleOf(state, id, EntityKind::kPedestrian, "SetRoute");
+  CheckSpeed(EntityKind::kPedestrian, speed);
   SIM4CV_THROW_UNLESS(path.size() >= (closed ? 3u : 2u),
                       "a walking route needs at least " << (closed ? 3 : 2) << " points; got " << path.size());
   vehicle.walk = std::make_unique<vehicles::Polyline>(std::move(path), closed);
-  Agent& agent = *state.Find(id);
-  agent.cruise_speed = speed;
-  agent.walked = 0.0;  // from the route's start, where it is put at once
-  PlaceWalker(*vehicle.walk, agent.walked, speed, agent.body);
+  Entity& entity = *state.Find(id);
+  entity.cruise_speed = speed;
+  entity.walked = 0.0;  // from the route's start, where it is put at once
+  PlaceWalker(*vehicle.walk, entity.walked, speed, entity.body);
 }
 
 void World::SetCruiseSpeed(State& state, uint32_t id, float speed) {
-  const Agent* found = state.Find(id);
-  if (found && found->kind == AgentKind::kPedestrian) {
-    Vehicle& walker = VehicleOf(state, id, AgentKind::kPedestrian, "SetSpeed");
+  const Entity* found = state.Find(id);
+  if (found && found->kind == EntityKind::kPedestrian) {
+    Vehicle& walker = VehicleOf(state, id, EntityKind::kPedestrian, "SetSpeed");
     SIM4CV_THROW_UNLESS(walker.walk, "pedestrian " << id << " has no route to walk at " << speed << " m/s");
-    CheckSpeed(AgentKind::kPedestrian, speed);
+    CheckSpeed(EntityKind::kPedestrian, speed);
     state.Find(id)->cruise_speed = speed;
     return;
   }
-  Vehicle& vehicle = VehicleOf(state, id, AgentKind::kCar, "SetSpeed");
-  CheckSpeed(AgentKind::kCar, speed);
+  Vehicle& vehicle = VehicleOf(state, id, EntityKind::kCar, "SetSpeed");
+  CheckSpeed(EntityKind::kCar, speed);
   SIM4CV_THROW_UNLESS(vehicle.driver, "car " << id << " has no route to drive at " << speed
                                              << " m/s; give it one (SetRoute) or drive it with Controls");
   vehicle.driver->set_speed(speed);
-  Agent& agent = *state.Find(id);
-  agent.cruise_speed = speed;
-  agent.car_command.manual = false;
+  Entity& entity = *state.Find(id);
+  entity.cruise_speed = speed;
+  entity.car_command.manual = false;
 }
 
 void World::SetUavOrder(State& state, uint32_t id, const UavOrder& order) {
-  VehicleOf(state, id, AgentKind::kUav, "CommandUav");
+  VehicleOf(state, id, EntityKind::kUav, "CommandUav");
   if (order.mode == UavOrder::Mode::kFollow) {
-    const Agent* target = state.Find(order.target);
+    const Entity* target = state.Find(order.target);
     SIM4CV_THROW_UNLESS(target && order.target != id, "UAV " << id << " cannot follow entity " << order.target
-                                                             << "; the world holds " << AgentList(state));
+                                                             << "; the world holds " << EntityList(state));
   }
   state.Find(id)->uav_order = order;
 }
 
 void World::Step(State& state, double dt) {
   SIM4CV_DEMAND(dt > 0);
-  // Traffic first, from the agents' poses at the step's start, so the cars
+  // Traffic first, from the entities' poses at the step's start, so the cars
   // below see where the traffic will be and the order is fixed. A whole
   // replay takes the traffic from the log too.
   if (!replay_ || !replay_only_.empty()) StepTraffic(state, dt);
@@ -308,7 +308,7 @@ void World::FollowReplay(State& state) const {
   // Every substep of a frame looks up the same pose; the frame id is counted
   // by the caller after the frame's last substep.
   const uint64_t frame_id = state.frame_id + 1;
-  for (Agent& agent : state.agents) Follow(replay_->Find(frame_id, agent.id), agent.body);
+  for (Entity& entity : state.entities) Follow(replay_->Find(frame_id, entity.id), entity.body);
   // Traffic the log holds is put where it was; the rest stands, at rest.
   auto& traffic = state.traffic;
   for (std::size_t i = 0; i < traffic.cars.size(); ++i) {
@@ -325,54 +325,54 @@ void World::FollowReplay(State& state) const {
 
 void World::StepPhysics(State& state, double dt) {
   auto& b = *bodies_;
-  SIM4CV_DEMAND(b.vehicles.size() == state.agents.size());
-  for (std::size_t i = 0; i < state.agents.size(); ++i) {
-    Agent& agent = state.agents[i];
+  SIM4CV_DEMAND(b.vehicles.size() == state.entities.size());
+  for (std::size_t i = 0; i < state.entities.size(); ++i) {
+    Entity& entity = state.entities[i];
     Vehicle& vehicle = b.vehicles[i];
-    SIM4CV_ASSERT(vehicle.id == agent.id);
-    if (Replayed(agent.id)) {
-      Follow(replay_->Find(state.frame_id + 1, agent.id), agent.body);
+    SIM4CV_ASSERT(vehicle.id == entity.id);
+    if (Replayed(entity.id)) {
+      Follow(replay_->Find(state.frame_id + 1, entity.id), entity.body);
       if (vehicle.car) {
-        vehicle.car->Reset(agent.body.position.head<2>(), agent.body.Yaw());
+        vehicle.car->Reset(entity.body.position.head<2>(), entity.body.Yaw());
       } else if (vehicle.uav) {
-        vehicle.uav->Reset(agent.body.position, agent.body.Yaw());
+        vehicle.uav->Reset(entity.body.position, entity.body.Yaw());
       }
       continue;
     }
-    if (agent.kind == AgentKind::kPedestrian) {
-      StepWalker(vehicle, agent, dt);
+    if (entity.kind == EntityKind::kPedestrian) {
+      StepWalker(vehicle, entity, dt);
       continue;
     }
     if (vehicle.car) {
       vehicles::CarControls controls;
-      if (agent.car_command.manual || !vehicle.driver) {
-        const CarCommand& c = agent.car_command;
+      if (entity.car_command.manual || !vehicle.driver) {
+        const CarCommand& c = entity.car_command;
         controls = {c.steering, c.throttle, c.brake, false};
       } else {
         if (AnythingToGiveWayTo(state))
-          vehicle.driver->set_speed(SpeedForTraffic(state, agent, vehicle.driver->path()));
+          vehicle.driver->set_speed(SpeedForTraffic(state, entity, vehicle.driver->path()));
         controls = vehicle.driver->Update(vehicle.car->State(), dt);
-        agent.car_command = {static_cast<float>(controls.steering), static_cast<float>(controls.throttle),
+        entity.car_command = {static_cast<float>(controls.steering), static_cast<float>(controls.throttle),
                              static_cast<float>(controls.brake), false};
       }
       vehicle.car->SetControls(controls);
       vehicle.car->Update(dt);
     } else {
-      vehicle.uav->SetCommand(UavCommandFor(agent.uav_order, agent.body, state));
+      vehicle.uav->SetCommand(UavCommandFor(entity.uav_order, entity.body, state));
       vehicle.uav->Update(dt);
     }
   }
   // maxSubSteps = 0: exactly one step of dt, no interpolation, so the result
   // depends only on the state and never on wall time.
   b.world.stepSimulation(dt, 0);
-  for (std::size_t i = 0; i < state.agents.size(); ++i) {
+  for (std::size_t i = 0; i < state.entities.size(); ++i) {
     const Vehicle& vehicle = b.vehicles[i];
-    if (Replayed(vehicle.id) || state.agents[i].kind == AgentKind::kPedestrian) continue;  // State holds its body
-    CopyState(vehicle.car ? vehicle.car->State() : vehicle.uav->State(), state.agents[i].body);
+    if (Replayed(vehicle.id) || state.entities[i].kind == EntityKind::kPedestrian) continue;  // State holds its body
+    CopyState(vehicle.car ? vehicle.car->State() : vehicle.uav->State(), state.entities[i].body);
   }
 }
 
-void World::StepWalker(const Vehicle& vehicle, Agent& walker, double dt) {
+void World::StepWalker(const Vehicle& vehicle, Entity& walker, double dt) {
   if (!vehicle.walk) return;
   const vehicles::Polyline& route = *vehicle.walk;
   const double end = route.length();

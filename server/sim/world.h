@@ -1,5 +1,5 @@
 // The Bullet world: the only code that touches Bullet. Per physics step it
-// turns each agent's command in State into its vehicle's actuator inputs,
+// turns each entity's command in State into its vehicle's actuator inputs,
 // steps the world once, and writes the bodies' poses and velocities back
 // into State.
 //
@@ -25,11 +25,11 @@ class ReplayTrack;
 
 namespace sim4cv::sim {
 
-// Agents take ids below the first static object's (kFirstBuildingId), so the
+// Entities take ids below the first static object's (kFirstBuildingId), so the
 // mask's instance ids stay unique: at most this many at once.
-inline constexpr uint32_t kMaxAgentId = kFirstBuildingId - 1;
+inline constexpr uint32_t kMaxEntityId = kFirstBuildingId - 1;
 
-// Where to place a new agent: on the ground (cars) or in the air (UAVs).
+// Where to place a new entity: on the ground (cars) or in the air (UAVs).
 struct SpawnPose {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m; cars ignore z (they stand on the ground)
   double yaw = 0.0;                                    // rad, counter-clockwise from east
@@ -57,9 +57,9 @@ class World {
   // UAV hovering; a new pedestrian standing (kinematic: no Bullet body)
   // until SetRoute gives it a path to walk. `name` must be unique (empty:
   // "car_<id>" / "uav_<id>" / "pedestrian_<id>").
-  // Returns the new agent's id: the lowest free one.
-  uint32_t Spawn(State& state, AgentKind kind, const std::string& name, const SpawnPose& pose);
-  // Removes an agent; UAVs that followed it hold their position instead.
+  // Returns the new entity's id: the lowest free one.
+  uint32_t Spawn(State& state, EntityKind kind, const std::string& name, const SpawnPose& pose);
+  // Removes an entity; UAVs that followed it hold their position instead.
   void Remove(State& state, uint32_t id);
   // The car's waypoint follower drives `path` (a closed loop or an open
   // path, where it stops at the end) at `speed` m/s; speed 0 stops it there.
@@ -72,9 +72,9 @@ class World {
   void SetUavOrder(State& state, uint32_t id, const UavOrder& order);
 
   // Replay (docs/logs.md): from now on Step copies into State each replayed
-  // agent's logged pose and velocity of the frame being stepped to
+  // entity's logged pose and velocity of the frame being stepped to
   // (state.frame_id + 1). A frame the log does not hold (past its end, or a
-  // gap) keeps the previous pose at rest. `only` empty: every agent is
+  // gap) keeps the previous pose at rest. `only` empty: every entity is
   // replayed and Bullet is not stepped at all (nothing else in the world
   // moves, and rendering reads State). Otherwise only the listed entities
   // are, and the rest is simulated around them: e.g. the tracking target
@@ -90,9 +90,9 @@ class World {
   struct Bodies;
   struct Vehicle;
 
-  Vehicle& VehicleOf(const State& state, uint32_t id, AgentKind kind, const char* what);
+  Vehicle& VehicleOf(const State& state, uint32_t id, EntityKind kind, const char* what);
   void StepPhysics(State& state, double dt);
-  void StepWalker(const Vehicle& vehicle, Agent& walker, double dt);
+  void StepWalker(const Vehicle& vehicle, Entity& walker, double dt);
   void SetWalk(State& state, uint32_t id, std::vector<Eigen::Vector2d> path, bool closed, float speed);
   void StepTraffic(State& state, double dt);
   // Whether a car's follower must look out for others (traffic, other
@@ -101,7 +101,7 @@ class World {
   // Slows a car's waypoint follower for traffic, other simulated cars and
   // pedestrians standing or moving ahead on its path, so it neither drives
   // through a car nor runs down a walker.
-  double SpeedForTraffic(const State& state, const Agent& car, const vehicles::Polyline& path) const;
+  double SpeedForTraffic(const State& state, const Entity& car, const vehicles::Polyline& path) const;
   void FollowReplay(State& state) const;
   // Whether entity `id` follows the log (only while a replay is set).
   bool Replayed(uint32_t id) const;
@@ -112,11 +112,11 @@ class World {
   State initial_state_;  // taken when the scene's bodies were spawned
   std::shared_ptr<const runlog::ReplayTrack> replay_;
   std::vector<uint32_t> replay_only_;         // sorted; empty: all
-  std::vector<traffic::Obstacle> obstacles_;  // the agents' cars, for traffic: reused every step
+  std::vector<traffic::Obstacle> obstacles_;  // the entities' cars, for traffic: reused every step
   traffic::TrafficIds traffic_ids_;           // what the traffic's entities are called in logs
 };
 
-// The ids of a State's agents, as "1 ('car'), 2 ('uav')": for Error messages.
-std::string AgentList(const State& state);
+// The ids of a State's entities, as "1 ('car'), 2 ('uav')": for Error messages.
+std::string EntityList(const State& state);
 
 }  // namespace sim4cv::sim

@@ -25,11 +25,11 @@ void World::StepTraffic(State& state, double dt) {
   obstacles_.clear();
   // Spawned pedestrians count as well: traffic cars stop for them, and
   // walkers keep off them.
-  for (const Agent& agent : state.agents) {
-    if (agent.kind == AgentKind::kUav) continue;
-    const double yaw = agent.body.Yaw();
-    const double speed = agent.body.linear_velocity.head<2>().dot(Eigen::Vector2d(std::cos(yaw), std::sin(yaw)));
-    obstacles_.push_back({agent.body.position.head<2>(), yaw, std::max(0.0, speed)});
+  for (const Entity& entity : state.entities) {
+    if (entity.kind == EntityKind::kUav) continue;
+    const double yaw = entity.body.Yaw();
+    const double speed = entity.body.linear_velocity.head<2>().dot(Eigen::Vector2d(std::cos(yaw), std::sin(yaw)));
+    obstacles_.push_back({entity.body.position.head<2>(), yaw, std::max(0.0, speed)});
   }
   traffic::StepTraffic(*scene_.traffic, state.traffic, state.sim_time, dt, obstacles_);
 }
@@ -37,11 +37,11 @@ void World::StepTraffic(State& state, double dt) {
 bool World::AnythingToGiveWayTo(const State& state) const {
   if (scene_.traffic) return true;
   int others = 0;  // cars and pedestrians; one car alone has nobody to meet
-  for (const Agent& agent : state.agents) others += agent.kind != AgentKind::kUav ? 1 : 0;
+  for (const Entity& entity : state.entities) others += entity.kind != EntityKind::kUav ? 1 : 0;
   return others > 1;
 }
 
-double World::SpeedForTraffic(const State& state, const Agent& car, const vehicles::Polyline& path) const {
+double World::SpeedForTraffic(const State& state, const Entity& car, const vehicles::Polyline& path) const {
   // Something on the car's own path ahead (within a car's half width plus
   // the other's of it) is treated as standing: stop `standoff` metres behind
   // it (centre to centre) with a gentle 3 m/s^2, planning from where it is
@@ -60,10 +60,10 @@ double World::SpeedForTraffic(const State& state, const Agent& car, const vehicl
   };
   for (const traffic::MovingCar& other : state.traffic.cars) consider(other.position.head<2>(), 1.8, 6.0);
   // The other simulated cars and the spawned pedestrians, likewise.
-  for (const Agent& other : state.agents) {
-    if (other.id == car.id || other.kind == AgentKind::kUav) continue;
+  for (const Entity& other : state.entities) {
+    if (other.id == car.id || other.kind == EntityKind::kUav) continue;
     const bool walking = other.body.linear_velocity.squaredNorm() > 0.0;
-    if (other.kind == AgentKind::kCar) {
+    if (other.kind == EntityKind::kCar) {
       consider(other.body.position.head<2>(), 1.8, 6.0);
     } else {
       consider(other.body.position.head<2>(), walking ? 2.2 : 1.2, 4.0);

@@ -85,7 +85,7 @@ TEST_F(SimulationTest, ResetRestoresTheSceneAndDropsWhatClientsAdded) {
   proto::Configure reset;
   reset.mutable_reset();
   EXPECT_TRUE(Apply(reset).new_scene);
-  EXPECT_EQ(sim_.state().agents.size(), 2u);
+  EXPECT_EQ(sim_.state().entities.size(), 2u);
   EXPECT_EQ(sim_.state().physics_steps, 0u);
   EXPECT_EQ(sim_.cameras().size(), 3u);
 }
@@ -121,7 +121,7 @@ TEST_F(SimulationTest, AShippedMapLoadsByNameAndAnswersRoadQueries) {
 // build (finding 1): the world is then exactly the one before it.
 TEST_F(SimulationTest, UndoPutsBackTheWorldALoadMapOrAddCameraReplaced) {
   Apply(SpawnUav("scout"));
-  const std::size_t agents = sim_.state().agents.size();
+  const std::size_t entities = sim_.state().entities.size();
   const std::size_t cameras = sim_.cameras().size();
   proto::Configure load;
   load.mutable_load_map()->set_name("tracking/easy_urban");
@@ -129,7 +129,7 @@ TEST_F(SimulationTest, UndoPutsBackTheWorldALoadMapOrAddCameraReplaced) {
   EXPECT_NE(sim_.scene().name, "default");
   sim_.Undo();
   EXPECT_EQ(sim_.scene().name, "default");
-  EXPECT_EQ(sim_.state().agents.size(), agents);
+  EXPECT_EQ(sim_.state().entities.size(), entities);
   EXPECT_NE(sim_.state().FindByName("scout"), nullptr);
   EXPECT_EQ(sim_.cameras().size(), cameras);
   sim_.world().Step(sim_.state(), 1.0 / 240);  // the old World is whole again

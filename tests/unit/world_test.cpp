@@ -18,11 +18,11 @@
 namespace sim4cv::sim {
 namespace {
 
-// The scene's own agents: its target car and its camera UAV.
-Agent& CarOf(State& state) { return *state.Find(kCarEntityId); }
-const Agent& CarOf(const State& state) { return *state.Find(kCarEntityId); }
-Agent& UavOf(State& state) { return *state.Find(kUavEntityId); }
-const Agent& UavOf(const State& state) { return *state.Find(kUavEntityId); }
+// The scene's own entities: its target car and its camera UAV.
+Entity& CarOf(State& state) { return *state.Find(kCarEntityId); }
+const Entity& CarOf(const State& state) { return *state.Find(kCarEntityId); }
+Entity& UavOf(State& state) { return *state.Find(kUavEntityId); }
+const Entity& UavOf(const State& state) { return *state.Find(kUavEntityId); }
 
 constexpr double kDt = 1.0 / 240.0;
 

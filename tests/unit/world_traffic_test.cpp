@@ -142,7 +142,7 @@ TEST(WorldTrafficTest, TrafficIsLabelledWithItsClassAfterTheMapsObjects) {
   EXPECT_EQ(classes.count(proto::OBJECT_CLASS_TRAFFIC_LIGHT), lights);
   EXPECT_EQ(classes.count(proto::OBJECT_CLASS_PEDESTRIAN), 8u);
   EXPECT_EQ(classes.count(proto::OBJECT_CLASS_CAR), 1u + 4u + 6u) << "the target, parked and moving cars";
-  // The 3D ground truth lists the same moving objects: agents, then traffic.
+  // The 3D ground truth lists the same moving objects: entities, then traffic.
   EXPECT_EQ(graphics.moving_objects().size(), 2u + 6u + 8u);
 }
 

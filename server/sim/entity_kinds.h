@@ -1,6 +1,6 @@
-// The kinds of agent (a thing that moves in the world: the target car, a
+// The kinds of entity (a thing that moves in the world: the target car, a
 // UAV, a pedestrian), listed once. The protocol's EntityKind and ObjectClass
-// (server/session/agent_kinds_wire.h asserts they agree), the World's names
+// (server/session/entity_kinds_wire.h asserts they agree), the World's names
 // for them, the run log's object classes and the Configure checks all read
 // this table; adding a kind is one line here plus its behaviour (its vehicle
 // in World, its mesh in SceneGraphics).
@@ -15,37 +15,37 @@ namespace sim4cv::sim {
 
 // X(Name, value: proto EntityKind, WIRE: the proto enums' suffix, "name",
 //   run-log object class (runlog::kObjectClass*; daemon/run_logger.cpp asserts they agree))
-#define SIM4CV_AGENT_KINDS(X)                     \
+#define SIM4CV_ENTITY_KINDS(X)                     \
   X(Car, 1, CAR, "car", 1)                        \
   X(Uav, 2, UAV, "UAV", 2)                        \
   X(Pedestrian, 3, PEDESTRIAN, "pedestrian", 7)
 
-enum class AgentKind : uint8_t {
-#define SIM4CV_AGENT_KIND_ENUM(NAME, VALUE, ...) k##NAME = VALUE,
-  SIM4CV_AGENT_KINDS(SIM4CV_AGENT_KIND_ENUM)
-#undef SIM4CV_AGENT_KIND_ENUM
+enum class EntityKind : uint8_t {
+#define SIM4CV_ENTITY_KIND_ENUM(NAME, VALUE, ...) k##NAME = VALUE,
+  SIM4CV_ENTITY_KINDS(SIM4CV_ENTITY_KIND_ENUM)
+#undef SIM4CV_ENTITY_KIND_ENUM
 };
 
-struct AgentKindInfo {
-  AgentKind kind;
+struct EntityKindInfo {
+  EntityKind kind;
   std::string_view name;   // in messages and logs
   uint16_t log_class;      // its object class in run logs (docs/logs.md)
 };
 
-inline constexpr std::array kAgentKinds = {
-#define SIM4CV_AGENT_KIND_INFO(NAME, VALUE, WIRE, TEXT, LOG_CLASS) AgentKindInfo{AgentKind::k##NAME, TEXT, LOG_CLASS},
-    SIM4CV_AGENT_KINDS(SIM4CV_AGENT_KIND_INFO)
-#undef SIM4CV_AGENT_KIND_INFO
+inline constexpr std::array kEntityKinds = {
+#define SIM4CV_ENTITY_KIND_INFO(NAME, VALUE, WIRE, TEXT, LOG_CLASS) EntityKindInfo{EntityKind::k##NAME, TEXT, LOG_CLASS},
+    SIM4CV_ENTITY_KINDS(SIM4CV_ENTITY_KIND_INFO)
+#undef SIM4CV_ENTITY_KIND_INFO
 };
 
 // The kind whose protocol value is `value`, or nullptr.
-constexpr const AgentKindInfo* FindAgentKind(int value) {
-  for (const AgentKindInfo& info : kAgentKinds) {
+constexpr const EntityKindInfo* FindEntityKind(int value) {
+  for (const EntityKindInfo& info : kEntityKinds) {
     if (static_cast<int>(info.kind) == value) return &info;
   }
   return nullptr;
 }
 
-constexpr const AgentKindInfo& InfoOf(AgentKind kind) { return *FindAgentKind(static_cast<int>(kind)); }
+constexpr const EntityKindInfo& InfoOf(EntityKind kind) { return *FindEntityKind(static_cast<int>(kind)); }
 
 }  // namespace sim4cv::sim

@@ -36,50 +36,50 @@ std::string ErrorOf(const std::function<void()>& action) {
   return "no error";
 }
 
-class WorldAgentsTest : public ::testing::Test {
+class WorldEntitiesTest : public ::testing::Test {
  protected:
   const Scene scene_ = DefaultScene(320, 180);
   World world_{scene_};
   State state_ = world_.InitialState();
 };
 
-TEST_F(WorldAgentsTest, TheSceneHasItsCarAndItsCameraUav) {
-  ASSERT_EQ(state_.agents.size(), 2u);
-  EXPECT_EQ(state_.agents[0].id, kCarEntityId);
-  EXPECT_EQ(state_.agents[0].kind, AgentKind::kCar);
-  EXPECT_EQ(state_.agents[1].id, kUavEntityId);
-  EXPECT_EQ(state_.agents[1].uav_order.mode, UavOrder::Mode::kFollow);
-  EXPECT_EQ(state_.agents[1].uav_order.target, kCarEntityId);
+TEST_F(WorldEntitiesTest, TheSceneHasItsCarAndItsCameraUav) {
+  ASSERT_EQ(state_.entities.size(), 2u);
+  EXPECT_EQ(state_.entities[0].id, kCarEntityId);
+  EXPECT_EQ(state_.entities[0].kind, EntityKind::kCar);
+  EXPECT_EQ(state_.entities[1].id, kUavEntityId);
+  EXPECT_EQ(state_.entities[1].uav_order.mode, UavOrder::Mode::kFollow);
+  EXPECT_EQ(state_.entities[1].uav_order.target, kCarEntityId);
 }
 
-TEST_F(WorldAgentsTest, SpawnTakesTheLowestFreeIdAndAUniqueName) {
-  const uint32_t a = world_.Spawn(state_, AgentKind::kUav, "", {{0, 0, 10}, 0});
-  const uint32_t b = world_.Spawn(state_, AgentKind::kCar, "blue", {{20, 20, 0}, 0});
+TEST_F(WorldEntitiesTest, SpawnTakesTheLowestFreeIdAndAUniqueName) {
+  const uint32_t a = world_.Spawn(state_, EntityKind::kUav, "", {{0, 0, 10}, 0});
+  const uint32_t b = world_.Spawn(state_, EntityKind::kCar, "blue", {{20, 20, 0}, 0});
   EXPECT_EQ(a, 3u);
   EXPECT_EQ(b, 4u);
   EXPECT_EQ(state_.Find(a)->name, "uav_3");
   world_.Remove(state_, a);
   EXPECT_EQ(state_.Find(a), nullptr);
-  EXPECT_EQ(world_.Spawn(state_, AgentKind::kUav, "", {{0, 0, 10}, 0}), 3u) << "the freed id is reused";
+  EXPECT_EQ(world_.Spawn(state_, EntityKind::kUav, "", {{0, 0, 10}, 0}), 3u) << "the freed id is reused";
   EXPECT_NE(ErrorOf([&] {
-              world_.Spawn(state_, AgentKind::kCar, "blue", {{0, 0, 0}, 0});
+              world_.Spawn(state_, EntityKind::kCar, "blue", {{0, 0, 0}, 0});
             }).find("an entity named 'blue' already exists"),
             std::string::npos);
   EXPECT_NE(ErrorOf([&] {
-              world_.Spawn(state_, AgentKind::kUav, "low", {{0, 0, 0.1}, 0});
+              world_.Spawn(state_, EntityKind::kUav, "low", {{0, 0, 0.1}, 0});
             }).find("z is 0.1"),
             std::string::npos);
   EXPECT_NE(ErrorOf([&] {
-              world_.Spawn(state_, AgentKind::kCar, "", {{NAN, 0, 0}, 0});
+              world_.Spawn(state_, EntityKind::kCar, "", {{NAN, 0, 0}, 0});
             }).find("not finite"),
             std::string::npos);
-  // Stepping with the new agents runs, and the parked car stays put.
+  // Stepping with the new entities runs, and the parked car stays put.
   const Eigen::Vector3d parked = state_.Find(b)->body.position;
   Simulate(world_, state_, 2.0);
   EXPECT_LT((state_.Find(b)->body.position - parked).head<2>().norm(), 0.05);
 }
 
-TEST_F(WorldAgentsTest, ErrorsNameTheIdAndTheKind) {
+TEST_F(WorldEntitiesTest, ErrorsNameTheIdAndTheKind) {
   EXPECT_NE(ErrorOf([&] { world_.Remove(state_, 42); }).find("no entity has id 42; the world holds 1 ('car', car), 2"),
             std::string::npos);
   EXPECT_NE(ErrorOf([&] {
@@ -90,7 +90,7 @@ TEST_F(WorldAgentsTest, ErrorsNameTheIdAndTheKind) {
               world_.SetRoute(state_, kCarEntityId, {{0, 0}, {1, 1}}, false, 99);
             }).find("speed 99"),
             std::string::npos);
-  const uint32_t car = world_.Spawn(state_, AgentKind::kCar, "", {{30, -60, 0}, 0});
+  const uint32_t car = world_.Spawn(state_, EntityKind::kCar, "", {{30, -60, 0}, 0});
   EXPECT_NE(ErrorOf([&] { world_.SetCruiseSpeed(state_, car, 4); }).find("has no route"), std::string::npos);
   EXPECT_NE(ErrorOf([&] {
               world_.SetUavOrder(state_, kUavEntityId, {UavOrder::Mode::kFollow, 77});
@@ -98,9 +98,9 @@ TEST_F(WorldAgentsTest, ErrorsNameTheIdAndTheKind) {
             std::string::npos);
 }
 
-TEST_F(WorldAgentsTest, AUavHoldsAPointItIsSentTo) {
+TEST_F(WorldEntitiesTest, AUavHoldsAPointItIsSentTo) {
   // In the open between the buildings and the road (the default scene's map: docs/scenes.md).
-  const uint32_t uav = world_.Spawn(state_, AgentKind::kUav, "scout", {{0, -20, 10}, 0});
+  const uint32_t uav = world_.Spawn(state_, EntityKind::kUav, "scout", {{0, -20, 10}, 0});
   UavOrder hold;
   hold.mode = UavOrder::Mode::kHold;
   hold.position = {6, -24, 14};
@@ -112,8 +112,8 @@ TEST_F(WorldAgentsTest, AUavHoldsAPointItIsSentTo) {
   EXPECT_NEAR(WrapAngle(body.Yaw() - 1.0), 0.0, 0.02);
 }
 
-TEST_F(WorldAgentsTest, AUavFliesAVelocityItIsGiven) {
-  const uint32_t uav = world_.Spawn(state_, AgentKind::kUav, "", {{0, -20, 10}, 0});
+TEST_F(WorldEntitiesTest, AUavFliesAVelocityItIsGiven) {
+  const uint32_t uav = world_.Spawn(state_, EntityKind::kUav, "", {{0, -20, 10}, 0});
   UavOrder fly;
   fly.mode = UavOrder::Mode::kVelocity;
   fly.velocity = {2, 1, 0};
@@ -124,11 +124,11 @@ TEST_F(WorldAgentsTest, AUavFliesAVelocityItIsGiven) {
   EXPECT_NEAR(body.position.z(), 10.0, 0.3);
 }
 
-TEST_F(WorldAgentsTest, FourUavsFilmTheCarEachFromItsOwnStation) {
+TEST_F(WorldEntitiesTest, FourUavsFilmTheCarEachFromItsOwnStation) {
   std::vector<uint32_t> uavs = {kUavEntityId};
   for (int i = 1; i < 4; ++i) {
     const BodyState& camera = state_.Find(kUavEntityId)->body;
-    uavs.push_back(world_.Spawn(state_, AgentKind::kUav, "", {camera.position + Eigen::Vector3d(0, 0, 3.0 * i), 0}));
+    uavs.push_back(world_.Spawn(state_, EntityKind::kUav, "", {camera.position + Eigen::Vector3d(0, 0, 3.0 * i), 0}));
     UavOrder follow = state_.Find(kUavEntityId)->uav_order;
     follow.altitude += 3.0 * i;
     world_.SetUavOrder(state_, uavs.back(), follow);
@@ -138,7 +138,7 @@ TEST_F(WorldAgentsTest, FourUavsFilmTheCarEachFromItsOwnStation) {
     Simulate(world_, state_, 1.0);
     if (second < 3) continue;  // the car is still accelerating from rest
     for (const uint32_t id : uavs) {
-      const Agent& uav = *state_.Find(id);
+      const Entity& uav = *state_.Find(id);
       const UavSetpoint station = FollowTarget(uav.uav_order, state_.Find(kCarEntityId)->body);
       worst = std::max(worst, (uav.body.position - station.position).norm());
     }
@@ -146,20 +146,20 @@ TEST_F(WorldAgentsTest, FourUavsFilmTheCarEachFromItsOwnStation) {
   EXPECT_LT(worst, 1.5) << "every UAV keeps within 1.5 m of its station while the car laps";
 }
 
-TEST_F(WorldAgentsTest, RemovingAFollowedCarMakesItsUavHold) {
-  const uint32_t car = world_.Spawn(state_, AgentKind::kCar, "", {{30, -60, 0}, 0});
+TEST_F(WorldEntitiesTest, RemovingAFollowedCarMakesItsUavHold) {
+  const uint32_t car = world_.Spawn(state_, EntityKind::kCar, "", {{30, -60, 0}, 0});
   world_.SetUavOrder(state_, kUavEntityId, {UavOrder::Mode::kFollow, car});
   Simulate(world_, state_, 1.0);
   world_.Remove(state_, car);
-  const Agent& uav = *state_.Find(kUavEntityId);
+  const Entity& uav = *state_.Find(kUavEntityId);
   EXPECT_EQ(uav.uav_order.mode, UavOrder::Mode::kHold);
   const Eigen::Vector3d held = uav.uav_order.position;
   Simulate(world_, state_, 3.0);
   EXPECT_LT((state_.Find(kUavEntityId)->body.position - held).norm(), 0.5);
 }
 
-TEST_F(WorldAgentsTest, ASpawnedCarDrivesTheRouteItIsGivenAndStopsAtItsEnd) {
-  const uint32_t car = world_.Spawn(state_, AgentKind::kCar, "", {{-40, -44, 0}, 0});
+TEST_F(WorldEntitiesTest, ASpawnedCarDrivesTheRouteItIsGivenAndStopsAtItsEnd) {
+  const uint32_t car = world_.Spawn(state_, EntityKind::kCar, "", {{-40, -44, 0}, 0});
   world_.SetRoute(state_, car, {{-40, -44}, {20, -44}}, false, 5.0f);
   Simulate(world_, state_, 6.0);
   EXPECT_GT(state_.Find(car)->body.linear_velocity.x(), 3.0);
@@ -169,7 +169,7 @@ TEST_F(WorldAgentsTest, ASpawnedCarDrivesTheRouteItIsGivenAndStopsAtItsEnd) {
   EXPECT_LT(body.linear_velocity.norm(), 0.2);
 }
 
-TEST_F(WorldAgentsTest, ReplayingOnlyTheTargetLetsTheUavFlyByPhysics) {
+TEST_F(WorldEntitiesTest, ReplayingOnlyTheTargetLetsTheUavFlyByPhysics) {
   const std::string path = ::testing::TempDir() + "world_replay_only_test.s4log";
   std::vector<State> recorded;
   {
@@ -183,7 +183,7 @@ TEST_F(WorldAgentsTest, ReplayingOnlyTheTargetLetsTheUavFlyByPhysics) {
       recorded.push_back(state);
       record.Clear();
       record.frame_id = frame;
-      for (const Agent& agent : state.agents) record.entities.push_back({agent.id, agent.body});
+      for (const Entity& entity : state.entities) record.entities.push_back({entity.id, entity.body});
       writer.Append(record);
     }
   }
@@ -210,8 +210,8 @@ TEST_F(WorldAgentsTest, ReplayingOnlyTheTargetLetsTheUavFlyByPhysics) {
 namespace sim4cv::sim {
 namespace {
 
-TEST_F(WorldAgentsTest, APedestrianWalksItsRouteAndStandsAtItsEnd) {
-  const uint32_t walker = world_.Spawn(state_, AgentKind::kPedestrian, "", {{0, -20, 5}, 0});
+TEST_F(WorldEntitiesTest, APedestrianWalksItsRouteAndStandsAtItsEnd) {
+  const uint32_t walker = world_.Spawn(state_, EntityKind::kPedestrian, "", {{0, -20, 5}, 0});
   EXPECT_EQ(state_.Find(walker)->name, "pedestrian_3");
   EXPECT_EQ(state_.Find(walker)->body.position, Eigen::Vector3d(0, -20, 0)) << "on the ground, whatever z was";
   Simulate(world_, state_, 1.0);
@@ -240,9 +240,9 @@ namespace {
 // The scene's car (driving east along y = -42 from x = -40 at the start)
 // meets a pedestrian standing in its lane, then a parked spawned car: it
 // stops short of each, and drives on once the way is clear.
-TEST_F(WorldAgentsTest, TheCarStopsForAPedestrianAndACarInItsLane) {
+TEST_F(WorldEntitiesTest, TheCarStopsForAPedestrianAndACarInItsLane) {
   const Eigen::Vector2d start = state_.Find(kCarEntityId)->body.position.head<2>();
-  const uint32_t walker = world_.Spawn(state_, AgentKind::kPedestrian, "", {{start.x() + 30, start.y(), 0}, 0});
+  const uint32_t walker = world_.Spawn(state_, EntityKind::kPedestrian, "", {{start.x() + 30, start.y(), 0}, 0});
   Simulate(world_, state_, 15.0);
   const BodyState& car = state_.Find(kCarEntityId)->body;
   const double to_walker = (state_.Find(walker)->body.position - car.position).head<2>().norm();
@@ -250,7 +250,7 @@ TEST_F(WorldAgentsTest, TheCarStopsForAPedestrianAndACarInItsLane) {
   EXPECT_LT(to_walker, 6.0) << "but not far short";
   EXPECT_LT(car.linear_velocity.norm(), 0.1);
   world_.Remove(state_, walker);
-  const uint32_t parked = world_.Spawn(state_, AgentKind::kCar, "", {{start.x() + 55, start.y(), 0}, 0});
+  const uint32_t parked = world_.Spawn(state_, EntityKind::kCar, "", {{start.x() + 55, start.y(), 0}, 0});
   Simulate(world_, state_, 15.0);
   const double to_parked =
       (state_.Find(parked)->body.position - state_.Find(kCarEntityId)->body.position).head<2>().norm();
