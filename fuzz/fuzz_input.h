@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 
 namespace sim4cv::fuzz {
 
@@ -35,6 +35,6 @@ inline void AppendRecord(std::string& out, std::string_view record) {
 
 // Client misbehaviour is logged at INFO, once per refused input: at fuzzing
 // rates that is only noise. Warnings and errors still show.
-inline void QuietLogs() { log::SetMinLevel(log::Level::kWarning); }
+inline void QuietLogs() { diagnostics::SetMinLevel(diagnostics::Level::kWarning); }
 
 }  // namespace sim4cv::fuzz

@@ -8,7 +8,7 @@
 
 #include "protocol/framing.h"
 #include "server/common/check.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 #include "server/daemon/sim_thread.h"
 #include "server/daemon/state_message.h"
 #include "server/transport/shm/shm_transport.h"
@@ -18,11 +18,11 @@
 namespace sim4cv::daemon {
 namespace {
 
-log::Level ParseLevel(const std::string& name) {
-  if (name == "debug") return log::Level::kDebug;
-  if (name == "warning") return log::Level::kWarning;
-  if (name == "error") return log::Level::kError;
-  return log::Level::kInfo;
+diagnostics::Level ParseLevel(const std::string& name) {
+  if (name == "debug") return diagnostics::Level::kDebug;
+  if (name == "warning") return diagnostics::Level::kWarning;
+  if (name == "error") return diagnostics::Level::kError;
+  return diagnostics::Level::kInfo;
 }
 
 // The fixed part of every Welcome; the scene's name, cameras and entities
@@ -41,7 +41,7 @@ proto::Welcome MakeWelcome(const Config& config, const std::vector<std::unique_p
 }  // namespace
 
 int RunDaemon(const Config& config) {
-  log::SetMinLevel(ParseLevel(config.log_level));
+  diagnostics::SetMinLevel(ParseLevel(config.log_level));
   sigset_t stop_signals;
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGINT);

@@ -3,7 +3,7 @@
 #include <chrono>
 
 #include "server/common/check.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 #include "server/sim/log/replay_check.h"
 #include "server/sim/traffic_bodies.h"
 

@@ -6,7 +6,7 @@
 
 #include "protocol/framing.h"
 #include "server/common/limits.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 #include "server/common/quoted.h"
 #include "server/session/configure_check.h"
 

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 #include "tests/support/no_warnings.h"
 
 namespace sim4cv::testing {
@@ -48,10 +48,10 @@ void ExpectLogged(const std::string& substring) {
 
 int main(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
-  sim4cv::log::SetSink([](sim4cv::log::Level level, std::string_view text) {
-    if (level < sim4cv::log::Level::kWarning) return;
+  sim4cv::diagnostics::SetSink([](sim4cv::diagnostics::Level level, std::string_view text) {
+    if (level < sim4cv::diagnostics::Level::kWarning) return;
     std::lock_guard lock(sim4cv::testing::g_mutex);
-    sim4cv::testing::g_logged.emplace_back(std::string(sim4cv::log::LevelName(level)) + " " + std::string(text));
+    sim4cv::testing::g_logged.emplace_back(std::string(sim4cv::diagnostics::LevelName(level)) + " " + std::string(text));
   });
   ::testing::UnitTest::GetInstance()->listeners().Append(new sim4cv::testing::FailOnWarnings);
   return RUN_ALL_TESTS();

@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "protocol/shm_sync.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 #include "server/session/client_protocol.h"
 #include "server/transport/shm/shm_client_area.h"
 #include "server/transport/shm/shm_client_link.h"

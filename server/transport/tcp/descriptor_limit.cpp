@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "server/common/limits.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 
 namespace sim4cv::transport {
 namespace {

@@ -2,7 +2,7 @@
 
 #include "protocol/framing.h"
 #include "server/common/limits.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 
 namespace sim4cv::transport {
 

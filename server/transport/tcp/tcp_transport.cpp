@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "server/common/limits.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 #include "server/transport/tcp/descriptor_limit.h"
 #include "server/transport/tcp/tcp_session.h"
 

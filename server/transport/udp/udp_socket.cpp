@@ -8,7 +8,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 
 namespace sim4cv::transport {
 namespace {

@@ -15,7 +15,7 @@
 #include "protocol/framing.h"
 #include "server/common/check.h"
 #include "server/common/limits.h"
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 #include "server/transport/udp/udp_counters.h"
 #include "server/transport/udp/udp_peer.h"
 

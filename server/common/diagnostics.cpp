@@ -1,4 +1,4 @@
-#include "server/common/log.h"
+#include "server/common/diagnostics.h"
 
 #include <atomic>
 #include <chrono>
@@ -9,7 +9,7 @@
 
 #include "server/common/check.h"
 
-namespace sim4cv::log {
+namespace sim4cv::diagnostics {
 namespace {
 std::atomic<int> g_min_level{static_cast<int>(Level::kInfo)};
 std::mutex g_mutex;
@@ -44,7 +44,7 @@ void Write(Level level, std::string_view text) {
   std::fprintf(stderr, "[%.6f] %-5s %.*s\n", t, LevelName(level), static_cast<int>(text.size()), text.data());
 }
 
-}  // namespace sim4cv::log
+}  // namespace sim4cv::diagnostics
 
 namespace sim4cv::detail {
 void AbortOnBrokenInvariant(const char* condition, const char* file, int line) {
