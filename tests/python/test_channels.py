@@ -3,6 +3,9 @@ numpy view shaped by the Image's element type and components; the dense
 channels agree with depth; two lockstep daemons give identical bytes; the
 colourising helpers give images of the right shape."""
 
+import os
+import re
+
 import numpy as np
 
 import sim4cv
@@ -64,3 +67,11 @@ def test_colour_images(daemon, connect):
     assert visualize.semantic_colours(ids).tolist() == [[[70, 130, 180], [0, 0, 142], [128, 64, 128]]]
     folded = visualize.cityscapes_train_ids(np.array([[19, 20, 21, 13]], np.uint8))
     assert folded.tolist() == [[0, 0, 255, 13]]
+
+
+def test_python_class_table_matches_the_protocol_header():
+    header = os.path.join(os.path.dirname(__file__), "..", "..", "protocol", "semantic_classes.h")
+    rows = re.findall(r'X\((\w+), (\d+), "([^"]+)", (\d+), (\d+), (\d+), (\d+)\)', open(header).read())
+    assert len(rows) == len(visualize.SEMANTIC_CLASSES)
+    for _, value, name, r, g, b, fold in rows:
+        assert visualize.SEMANTIC_CLASSES[int(value)] == (name, (int(r), int(g), int(b)), int(fold)), name

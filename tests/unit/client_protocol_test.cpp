@@ -14,6 +14,7 @@
 #include "protocol/framing.h"
 #include "server/common/limits.h"
 #include "tests/support/no_warnings.h"
+#include "tests/support/world_info.h"
 
 namespace sim4cv::session {
 namespace {
@@ -99,13 +100,7 @@ class ClientProtocolTest : public ::testing::Test {
       : context_{scene_, mode, MakeWelcome(mode), world_, commands_, latest_state_, 1u << 20, counters_},
         protocol_(kClient, context_, link_, &mailbox_) {
     // What the sim thread publishes: here only the scene's first camera.
-    proto::WorldInfo world;
-    world.set_scene_name(scene_.name);
-    proto::CameraInfo* camera = world.add_cameras();
-    camera->set_name(scene_.cameras[0].name);
-    camera->set_width(scene_.cameras[0].width);
-    camera->set_height(scene_.cameras[0].height);
-    world_.Publish(world);
+    world_.Publish(testing::FirstCameraWorld(scene_));
   }
 
   Outcome Send(const proto::Envelope& request) { return protocol_.Handle(request, reply_); }

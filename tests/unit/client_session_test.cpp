@@ -14,6 +14,7 @@
 #include "protocol/framing.h"
 #include "server/sim/scene.h"
 #include "tests/support/no_warnings.h"
+#include "tests/support/world_info.h"
 
 namespace sim4cv::session {
 namespace {
@@ -24,17 +25,7 @@ class ClientSessionTest : public ::testing::Test {
  protected:
   ClientSessionTest() : context_{scene_, proto::SIM_MODE_LOCKSTEP, Welcome(), world_, commands_, latest_state_,
                                  1u << 20, counters_} {
-    proto::WorldInfo world;
-    world.set_scene_name(scene_.name);
-    proto::CameraInfo* camera = world.add_cameras();
-    camera->set_name(scene_.cameras[0].name);
-    camera->set_width(scene_.cameras[0].width);
-    camera->set_height(scene_.cameras[0].height);
-    proto::CameraInfo* second = world.add_cameras();
-    second->set_name("second");
-    second->set_width(16);
-    second->set_height(16);
-    world_.Publish(world);
+    world_.Publish(testing::FirstCameraWorld(scene_, {{"second", 16}}));
     session_ = ClientSession::Create(7, context_, [this] { ++wakes_; });
   }
   ~ClientSessionTest() override { session_->Close(false); }
