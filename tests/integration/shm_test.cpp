@@ -39,7 +39,8 @@ TEST_F(ShmDaemonTest, LockstepTrackerLoopOverSharedMemoryAlone) {
   const proto::Welcome welcome = shm->Hello("shm-tracker");
   EXPECT_EQ(welcome.mode(), proto::SIM_MODE_LOCKSTEP);
   EXPECT_GT(welcome.client_id(), 0u);
-  shm->Subscribe(proto::DELIVERY_LOCKSTEP);
+  // RGB alone, no BOXES: every slot carries the boxes anyway (the ring subscribes to them).
+  shm->Subscribe(proto::DELIVERY_LOCKSTEP, {proto::CHANNEL_RGB});
   EXPECT_FALSE(shm->WaitForFrame(0, 300ms)) << "a lockstep daemon must not advance before the first Step";
 
   uint64_t last = 0;
