@@ -5,8 +5,11 @@
 //      three UAVs spawned, all following the car;
 //   3. frames rendered per second (RGB + depth + mask read back, boxes) from the UAV camera,
 //      then each further channel's added cost (protocol/channels.h), and RGB alone.
+//   4. the cost of the look (look.h): rgb+depth+mask with --quality fast, then full without
+//      shadows, then full (the default), in the conditions asked for.
 //   sim4cv_bench_sim_render [--map FILE] [--width W] [--height H] [--steps N] [--frames N]
 //                           [--traffic-cars N] [--traffic-parked N] [--traffic-pedestrians N] [--traffic-lights on|off]
+//                           [--conditions PRESET] [--quality full|fast]
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -15,6 +18,7 @@
 
 #include "bench/stats.h"
 #include "protocol/channels.h"
+#include "protocol/conditions.h"
 #include "server/render/gl_context.h"
 #include "server/render/ground_truth.h"
 #include "server/render/renderer.h"
@@ -106,6 +110,7 @@ int main(int argc, char** argv) {
   int steps = 24000, frames = 2000;
   std::string map_file;
   traffic::TrafficConfig traffic;  // none unless asked for (lights only on urban maps, as in the daemon)
+  conditions::Conditions look_conditions;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--map") map_file = argv[i + 1];
@@ -117,6 +122,8 @@ int main(int argc, char** argv) {
     if (flag == "--height") height = static_cast<uint32_t>(std::stoi(argv[i + 1]));
     if (flag == "--steps") steps = std::stoi(argv[i + 1]);
     if (flag == "--frames") frames = std::stoi(argv[i + 1]);
+    if (flag == "--conditions") look_conditions = conditions::Of(*conditions::FindByName(argv[i + 1]));
+    if (flag == "--quality") look_conditions.quality = *conditions::FindQuality(argv[i + 1]);
   }
   sim::Scene scene =
       map_file.empty() ? sim::DefaultScene(width, height) : sim::SceneFromMap(map_file, "", 6.0f, width, height);
@@ -140,6 +147,9 @@ int main(int argc, char** argv) {
   for (const auto& mesh : graphics.meshes()) triangles += mesh.indices.size() / 3;
   std::printf("render: %ux%u, %zu triangles in the scene, renderer %s\n", width, height, triangles,
               gl->RendererName().c_str());
+  const render::Look look = render::LookOf(look_conditions);
+  renderer.SetLook(look);
+  std::printf("render: conditions %s\n", conditions::Describe(look_conditions).c_str());
   RenderTimer timer{world, state, graphics, renderer, width, height, frames, scene.cameras[0]};
   const bench::Summary base = timer.Run(kBaseChannels);
   std::printf("render: %d frames (rgb,depth,mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: "
@@ -154,5 +164,20 @@ int main(int argc, char** argv) {
   }
   const bench::Summary rgb_only = timer.Run(channels::Bit(proto::CHANNEL_RGB));
   std::printf("render: rgb alone (no boxes) median %.3f ms\n", rgb_only.median);
+
+  // What the look costs: the same frames in the flat look, and in the full look without shadows.
+  render::Look fast = look;
+  fast.full = false;
+  fast.shadows = false;
+  render::Look unshadowed = look;
+  unshadowed.shadows = false;
+  render::Look full = look;
+  full.full = true;
+  for (const auto& [name, variant] : {std::pair{"fast", fast}, std::pair{"full, no shadows", unshadowed},
+                                      std::pair{"full", full}}) {
+    renderer.SetLook(variant);
+    const bench::Summary timed = timer.Run(kBaseChannels);
+    std::printf("look: %-16s rgb,depth,mask median %.3f ms, p99 %.3f ms\n", name, timed.median, timed.p99);
+  }
   return 0;
 }

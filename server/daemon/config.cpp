@@ -122,7 +122,12 @@ Usage: sim4cvd [flags]
   --shm-expiry-ms N         a shared-memory client silent this long is disconnected (default 5000)
   --shm-channels LIST       the pixel channels the shared-memory ring carries, separated by commas
                             (default rgb,depth,mask); fewer channels, less copying. The channels:
-)" + ChannelHelp() + R"(  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
+)" + ChannelHelp() + R"(  --conditions PRESET       weather and time of day of the RGB images: )" + conditions::Names() + R"(
+                            (default clear_noon; docs/protocol.md, "Conditions"). Only RGB changes
+  --hour H                  local solar time in [0, 24] (default: the preset's own hour)
+  --quality Q               full (sky, sun shadows, procedural materials) or fast (flat shading, the
+                            cheapest; default full)
+  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --log FILE                record every frame (poses, tracker and ground-truth boxes, car controls)
                             to the run log FILE (docs/logs.md; extension .s4log by convention)
   --log-label TEXT          what the run is, e.g. the tracker's name, for the log's header (default:
@@ -143,6 +148,7 @@ std::string DefaultMapsDir() { return SIM4CV_DEFAULT_MAPS_DIR; }
 
 std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::string& help_text) {
   Config config;
+  std::optional<double> hour;  // --hour, applied after --conditions wherever it stands
   using Setter = std::function<void(const std::string& flag, const std::string& value)>;
   const std::map<std::string, Setter> setters = {
       {"--scene", [&](auto&, auto& v) { config.scene_file = v; }},
@@ -214,6 +220,19 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--log-label", [&](auto&, auto& v) { config.log_label = v; }},
       {"--replay", [&](auto&, auto& v) { config.replay_file = v; }},
       {"--replay-only", [&](auto& f, auto& v) { config.replay_only = ParseIdList(f, v); }},
+      {"--conditions",
+       [&](auto& f, auto& v) {
+         const auto preset = conditions::FindByName(v);
+         SIM4CV_THROW_UNLESS(preset, f << " '" << v << "' is not a preset; use one of " << conditions::Names());
+         config.conditions.preset = *preset;
+       }},
+      {"--hour", [&](auto& f, auto& v) { hour = ParseNumber<double>(f, v, conditions::kMinHour, conditions::kMaxHour); }},
+      {"--quality",
+       [&](auto& f, auto& v) {
+         const auto quality = conditions::FindQuality(v);
+         SIM4CV_THROW_UNLESS(quality, f << " '" << v << "' is not a quality; use full or fast");
+         config.conditions.quality = *quality;
+       }},
   };
   for (std::size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--help" || args[i] == "-h") {
@@ -229,6 +248,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   SIM4CV_THROW_UNLESS(config.scene_file.empty() || config.map_file.empty(), "--scene and --map both given; pick one");
   SIM4CV_THROW_UNLESS(config.log_label.empty() || !config.log_file.empty(), "--log-label needs --log FILE");
   if (!config.traffic_seed_set) config.traffic.seed = config.seed;
+  config.conditions.hour = hour.value_or(conditions::Info(config.conditions.preset).hour);
   SIM4CV_THROW_UNLESS(config.replay_only.empty() || !config.replay_file.empty(),
                       "--replay-only needs --replay FILE: it says which entities follow that log");
   // The writer truncates its file before replay could read it.

@@ -11,6 +11,7 @@
 #include "server/transport/shm/shm_region.h"
 #include "server/common/limits.h"
 #include "server/sim/traffic/traffic_config.h"
+#include "protocol/conditions.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::daemon {
@@ -30,6 +31,9 @@ struct Config {
   // else --seed.
   traffic::TrafficConfig traffic;
   bool traffic_seed_set = false;
+  // Weather, time of day and quality of the RGB images (--conditions,
+  // --hour, --quality); clients change them with Configure.set_conditions.
+  conditions::Conditions conditions;
   uint64_t seed = 1;
   std::string bind_address = "127.0.0.1";
   uint16_t tcp_port = 0;

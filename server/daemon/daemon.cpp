@@ -95,8 +95,8 @@ int RunDaemon(const Config& config) {
   std::printf("%s\n", line.c_str());
   std::fflush(stdout);
   LOG_INFO("scene '" << scene.name << "', " << config.width << "x" << config.height << ", "
-                     << (config.mode == proto::SIM_MODE_LOCKSTEP ? "lockstep" : "realtime") << " mode, renderer "
-                     << sim.renderer_name());
+                     << (config.mode == proto::SIM_MODE_LOCKSTEP ? "lockstep" : "realtime") << " mode, "
+                     << conditions::Describe(config.conditions) << ", renderer " << sim.renderer_name());
 
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);

@@ -34,6 +34,7 @@ void FrameAssembler::Build(const sim::Scene& scene, const std::vector<sim::Camer
   }
   auto graphics = std::make_unique<render::SceneGraphics>(scene);
   auto renderer = std::make_unique<render::Renderer>(graphics->meshes(), width, height);
+  renderer->SetLook(look_);
   std::vector<uint32_t> unoccluded(graphics->instance_id_bound(), 0);
   // Nothing below throws; the old renderer dies before the meshes it drew.
   renderer_ = std::move(renderer);
@@ -42,6 +43,11 @@ void FrameAssembler::Build(const sim::Scene& scene, const std::vector<sim::Camer
   height_ = height;
   unoccluded_pixels_ = std::move(unoccluded);
   previous_views_.Clear();  // no flow across worlds
+}
+
+void FrameAssembler::SetLook(const render::Look& look) {
+  look_ = look;
+  if (renderer_) renderer_->SetLook(look_);
 }
 
 bool FrameAssembler::Fits(const std::vector<sim::CameraSpec>& cameras) const {

@@ -11,6 +11,7 @@
 
 #include "protocol/channels.h"
 #include "server/render/ground_truth.h"
+#include "server/render/look.h"
 #include "server/render/previous_views.h"
 #include "server/session/frame.h"
 #include "server/session/scheduler.h"
@@ -34,6 +35,8 @@ class FrameAssembler {
   // Builds the meshes and a renderer whose targets fit every camera; on a
   // throw the old ones stay (strong guarantee). Forgets the previous views.
   void Build(const sim::Scene& scene, const std::vector<sim::CameraSpec>& cameras);
+  // How RGB is lit from now on, kept across Build (look.h).
+  void SetLook(const render::Look& look);
   // Whether the render targets are large enough for every camera.
   bool Fits(const std::vector<sim::CameraSpec>& cameras) const;
   // Frees the GL objects (while the context is still current).
@@ -59,6 +62,7 @@ class FrameAssembler {
 
   std::unique_ptr<render::SceneGraphics> graphics_;
   std::unique_ptr<render::Renderer> renderer_;
+  render::Look look_;
   render::BoxExtractor boxes_;
   render::PreviousViews previous_views_;
   std::vector<uint32_t> unoccluded_pixels_;

@@ -26,6 +26,7 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   header.physics_hz = config.physics_hz;
   header.frame_hz = config.frame_hz;
   header.seed = config.seed;
+  header.conditions = conditions::Describe(config.conditions);  // fixed while logging (SetConditions is refused)
   // The entities and cameras at the start; records hold every entity
   // present at their frame, so ones spawned later appear there by id.
   for (const sim::Entity& entity : initial.entities) {

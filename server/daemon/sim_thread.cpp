@@ -12,6 +12,7 @@
 #include "server/daemon/state_message.h"
 #include "server/daemon/tracker_reports.h"
 #include "server/render/gl_context.h"
+#include "server/render/look.h"
 #include "server/session/client_protocol.h"
 
 namespace sim4cv::daemon {
@@ -156,7 +157,10 @@ void SimThread::RunRealtime() {
   }
 }
 
-void SimThread::BuildGraphics() { frames_.Build(sim_.scene(), sim_.cameras()); }
+void SimThread::BuildGraphics() {
+  frames_.SetLook(render::LookOf(sim_.conditions()));
+  frames_.Build(sim_.scene(), sim_.cameras());
+}
 
 bool SimThread::NeedsGraphics(const Simulation::Change& change) const {
   return change.new_scene || !frames_.Fits(sim_.cameras());
@@ -231,6 +235,10 @@ void SimThread::Configure(session::ConfigureCommand& command) {
       throw;
     }
     sim_.Commit();
+    if (change.new_conditions) {
+      frames_.SetLook(render::LookOf(sim_.conditions()));
+      LOG_INFO("conditions now " << conditions::Describe(sim_.conditions()));
+    }
     AfterChange(change, answer.world());  // only now does the answer hold the world
   } catch (const ConfigureError& refused) {
     refuse(refused.code(), refused.what());

@@ -38,7 +38,8 @@ auto Checked(Action&& action) {
 
 }  // namespace
 
-Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> scene) : config_(config) {
+Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> scene)
+    : config_(config), conditions_(config.conditions) {
   if (!config.replay_file.empty()) replay_ = LoadReplayTrack(config, *scene);
   Change ignored;
   Rebuild(std::move(scene), ignored);
@@ -123,6 +124,9 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       break;
     case Kind::kGetWorld:
       change.world_changed = false;
+      break;
+    case Kind::kSetConditions:
+      SetConditions(request.set_conditions(), change);
       break;
     case Kind::REQUEST_NOT_SET:
       throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "Configure carries no request");
@@ -359,6 +363,20 @@ void Simulation::QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult
   }
 }
 
+// Checked by CheckConfigure (names and ranges) before it gets here.
+void Simulation::SetConditions(const proto::SetConditions& request, Change& change) {
+  RefuseWhileLogging("SetConditions", "a log holds one look");
+  conditions::Conditions next = conditions_;
+  if (!request.preset().empty()) {
+    next.preset = *conditions::FindByName(request.preset());
+    next.hour = conditions::Info(next.preset).hour;
+  }
+  if (request.has_hour()) next.hour = request.hour();
+  if (!request.quality().empty()) next.quality = *conditions::FindQuality(request.quality());
+  conditions_ = next;
+  change.new_conditions = true;
+}
+
 void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   out.Clear();
   out.set_scene_name(scene_->name);
@@ -381,6 +399,10 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   if (scene_->map) {
     for (const auto& route : scene_->map->routes) out.add_routes(route.name);
   }
+  proto::ConditionsInfo& look = *out.mutable_conditions();
+  look.set_preset(std::string(conditions::Info(conditions_.preset).name));
+  look.set_hour(conditions_.hour);
+  look.set_quality(std::string(conditions::QualityName(conditions_.quality)));
 }
 
 }  // namespace sim4cv::daemon

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "protocol/conditions.h"
 #include "server/daemon/config.h"
 #include "server/sim/scene.h"
 #include "server/sim/world.h"
@@ -50,6 +51,8 @@ class Simulation {
     std::vector<uint32_t> removed_cameras;
     // False for the requests that only ask (GetWorld, QueryRoad): nothing to publish.
     bool world_changed = true;
+    // SetConditions: the renderer needs the new look.
+    bool new_conditions = false;
   };
   // Carries out `request` and fills `answer`, or throws ConfigureError
   // (changing nothing then). Whatever else it throws (std::bad_alloc while
@@ -66,6 +69,9 @@ class Simulation {
   // The world's entities, cameras and routes as a client sees them.
   void FillWorldInfo(proto::WorldInfo& out) const;
 
+  // Weather, time of day and quality: the config's, then the last SetConditions'.
+  const conditions::Conditions& conditions() const { return conditions_; }
+
  private:
   void Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change);
   uint32_t Spawn(const proto::Spawn& spawn);
@@ -76,6 +82,7 @@ class Simulation {
   void RemoveEntity(uint32_t id, Change& change);
   void LoadMap(const proto::LoadMap& load, Change& change);
   void QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult& out) const;
+  void SetConditions(const proto::SetConditions& request, Change& change);
   const sim::Entity& EntityOf(uint32_t id, const char* what) const;
   // The traffic a LoadMap asks for: its settings, else the daemon's flags.
   traffic::TrafficConfig TrafficFor(const proto::LoadMap& load) const;
@@ -97,6 +104,7 @@ class Simulation {
   std::unique_ptr<sim::World> world_;
   sim::State state_;
   std::vector<sim::CameraSpec> cameras_;
+  conditions::Conditions conditions_;
   std::shared_ptr<const runlog::ReplayTrack> replay_;  // --replay; kept across Reset
 };
 

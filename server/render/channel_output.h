@@ -25,9 +25,12 @@ struct ChannelOutput {
   const char* glsl_type;          // the fragment output's type, e.g. "vec2"
   // Statements that assign OUT from the inputs every channel may read
   // (renderer.cpp, kFragmentInputs): v_color, v_world_normal,
-  // v_camera_normal, v_depth, v_semantic, v_previous_clip, u_instance,
-  // u_to_light, u_viewport.
+  // v_camera_normal, v_world_position, v_depth, v_semantic,
+  // v_previous_clip, u_instance, u_to_light, u_viewport.
   const char* glsl_body;
+  // GLSL declared before main() when this channel is drawn (functions and
+  // their uniforms, e.g. shading.h); null: none.
+  const char* glsl_functions = nullptr;
 };
 
 // One per entry of channels::kPixelChannels, in that order.

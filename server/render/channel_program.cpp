@@ -18,14 +18,20 @@ uniform mat4 u_projection;
 uniform mat3 u_normal_matrix;
 uniform mat4 u_previous_model;
 uniform mat4 u_previous_view_projection;
+uniform float u_fog_density;  // per metre; the full look's fog (look.h)
 out vec3 v_world_normal;
+out vec3 v_world_position;
 out vec3 v_camera_normal;
 out vec3 v_color;
 out float v_depth;
 flat out uint v_semantic;
 out vec4 v_previous_clip;
+out float v_fog;
 void main() {
-  vec4 camera_position = u_view * (u_model * vec4(a_position, 1.0));
+  vec4 world_position = u_model * vec4(a_position, 1.0);
+  vec4 camera_position = u_view * world_position;
+  v_world_position = world_position.xyz;
+  v_fog = 1.0 - exp(-u_fog_density * length(camera_position.xyz));
   v_depth = -camera_position.z;  // camera-space z is affine over a triangle, so interpolation is exact
   v_world_normal = u_normal_matrix * a_normal;
   v_camera_normal = mat3(u_view) * v_world_normal;  // the view is rigid: its 3x3 part rotates
@@ -39,22 +45,28 @@ void main() {
 // What every channel's glsl_body may read (channel_output.h).
 constexpr const char* kFragmentInputs = R"(#version 330 core
 in vec3 v_world_normal;
+in vec3 v_world_position;
 in vec3 v_camera_normal;
 in vec3 v_color;
 in float v_depth;
 flat in uint v_semantic;
 in vec4 v_previous_clip;
+in float v_fog;
 uniform uint u_instance;
 uniform vec3 u_to_light;
 uniform vec2 u_viewport;
 )";
 
-std::string FragmentShader(PlaneSet planes) {
+std::string FragmentShader(PlaneSet planes, ChannelProgram::RgbLook look) {
   std::string declarations = kFragmentInputs;
+  const std::size_t after_version = declarations.find('\n') + 1;
+  if (look == ChannelProgram::RgbLook::kFullShadowed) declarations.insert(after_version, "#define SIM4CV_SHADOWS\n");
+  if (look != ChannelProgram::RgbLook::kFast) declarations.insert(after_version, "#define SIM4CV_FULL_LOOK\n");
   std::string body = "void main() {\n";
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     if ((planes & (1u << i)) == 0) continue;
     const ChannelOutput& output = *kChannelOutputs[i];
+    if (output.glsl_functions != nullptr) declarations += output.glsl_functions;
     const std::string name = "out_" + std::string(channels::kPixelChannels[i].name);
     declarations += "layout(location = " + std::to_string(i) + ") out " + output.glsl_type + " " + name + ";\n";
     body += "#define OUT " + name + "\n  {" + output.glsl_body + "  }\n#undef OUT\n";
@@ -64,8 +76,8 @@ std::string FragmentShader(PlaneSet planes) {
 
 }  // namespace
 
-ChannelProgram::ChannelProgram(PlaneSet planes) : planes_(planes) {
-  const std::string fragment = FragmentShader(planes);
+ChannelProgram::ChannelProgram(PlaneSet planes, RgbLook look) : planes_(planes) {
+  const std::string fragment = FragmentShader(planes, look);
   program_ = LinkProgram(kVertexShader, fragment.c_str());
   const auto locate = [&](const char* name) { return glGetUniformLocation(program_, name); };
   u_model = locate("u_model");
@@ -77,6 +89,7 @@ ChannelProgram::ChannelProgram(PlaneSet planes) : planes_(planes) {
   u_previous_model = locate("u_previous_model");
   u_previous_view_projection = locate("u_previous_view_projection");
   u_viewport = locate("u_viewport");
+  this->look.Locate(program_);
 }
 
 ChannelProgram::~ChannelProgram() { glDeleteProgram(program_); }

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "server/render/channel_output.h"
+#include "server/render/look_uniforms.h"
 
 namespace sim4cv::render {
 
@@ -16,7 +17,10 @@ using PlaneSet = uint32_t;
 
 class ChannelProgram {
  public:
-  explicit ChannelProgram(PlaneSet planes);
+  // How RGB is drawn: the fast look, the full one, or the full one with sun shadows.
+  enum class RgbLook { kFast, kFull, kFullShadowed };
+  inline static constexpr int kRgbLooks = 3;
+  ChannelProgram(PlaneSet planes, RgbLook look);
   ~ChannelProgram();
   ChannelProgram(const ChannelProgram&) = delete;
   ChannelProgram& operator=(const ChannelProgram&) = delete;
@@ -28,6 +32,7 @@ class ChannelProgram {
   // set (glUniform* ignores -1).
   GLint u_model = -1, u_view = -1, u_projection = -1, u_normal_matrix = -1, u_instance = -1, u_to_light = -1;
   GLint u_previous_model = -1, u_previous_view_projection = -1, u_viewport = -1;
+  LookUniforms look;  // those of shading.h, where a channel (RGB) uses them
 
  private:
   PlaneSet planes_ = 0;

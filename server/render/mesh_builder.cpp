@@ -158,15 +158,40 @@ Mesh MakeRoadLoop(const std::vector<Eigen::Vector2f>& closed_centerline, float l
   return mesh;
 }
 
-Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f& color) {
+namespace {
+
+// A style's silhouette as fractions of the car's length (x, from the rear
+// -0.5 to the front 0.5) and height (from the ground 0 to the roof 1).
+struct CarProfile {
+  float shoulder;                 // top of the painted body
+  float cabin_rear, cabin_front;  // the glasshouse
+};
+
+CarProfile ProfileOf(CarStyle style) {
+  switch (style) {
+    case CarStyle::kSedan: return {0.55f, -0.28f, 0.18f};
+    case CarStyle::kHatchback: return {0.55f, -0.46f, 0.15f};
+    case CarStyle::kEstate: return {0.55f, -0.48f, 0.18f};
+    case CarStyle::kSuv: return {0.62f, -0.46f, 0.22f};
+    case CarStyle::kVan: return {0.6f, -0.49f, 0.36f};
+    case CarStyle::kPickup: return {0.6f, -0.08f, 0.22f};
+  }
+  return {0.55f, -0.46f, 0.15f};
+}
+
+}  // namespace
+
+Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f& color, CarStyle style) {
   SIM4CV_THROW_UNLESS(length > 0.0f && width > 0.0f && height > 0.0f, "car dimensions must be > 0");
-  const Eigen::Vector3f tyre_color(0.05f, 0.05f, 0.05f);
-  const Eigen::Vector3f glass_tint = color * 0.6f;  // darker cabin reads as windows at low resolution
+  const Eigen::Vector3f tyre_color(0.04f, 0.04f, 0.045f);
+  const Eigen::Vector3f glass(0.05f, 0.06f, 0.07f);
+  const Eigen::Vector3f headlight(0.9f, 0.9f, 0.82f), taillight(0.55f, 0.03f, 0.03f);
+  const CarProfile profile = ProfileOf(style);
   const float bottom = -0.5f * height;
-  // Proportions as fractions of the overall size (a small hatchback).
-  const float wheel_top = bottom + 0.35f * height;
-  const float body_bottom = bottom + 0.15f * height;
-  const float body_top = bottom + 0.6f * height;
+  const auto at = [&](float fraction) { return bottom + fraction * height; };
+  const float wheel_top = at(style == CarStyle::kSuv || style == CarStyle::kPickup ? 0.4f : 0.35f);
+  const float body_bottom = at(0.15f);
+  const float shoulder = at(profile.shoulder);
   const Eigen::Vector3f wheel_half(0.1f * length, 0.09f * width, 0.5f * (wheel_top - bottom));
   Mesh mesh;
   for (float x : {-0.32f * length, 0.32f * length}) {
@@ -176,10 +201,23 @@ Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f&
       AppendBox(mesh, {x, y, bottom + wheel_half.z()}, wheel_half, tyre_color);
     }
   }
-  AppendBox(mesh, {0.0f, 0.0f, 0.5f * (body_bottom + body_top)},
-            {0.5f * length, 0.5f * width, 0.5f * (body_top - body_bottom)}, color);
-  AppendBox(mesh, {-0.05f * length, 0.0f, 0.5f * (body_top + 0.5f * height)},
-            {0.27f * length, 0.43f * width, 0.5f * (0.5f * height - body_top)}, glass_tint);
+  // The body, 1 % of the length short of each end where the lamps stand
+  // proud to the exact bounds (no coplanar faces to z-fight).
+  const Eigen::Vector3f lamp_half(0.01f * length, 0.1f * width, 0.05f * height);
+  AppendBox(mesh, {0.0f, 0.0f, 0.5f * (body_bottom + shoulder)},
+            {0.5f * length - 2.0f * lamp_half.x(), 0.5f * width, 0.5f * (shoulder - body_bottom)}, color);
+  // The glasshouse and its painted roof, which reaches the top of the bounds.
+  const float rear = profile.cabin_rear * length, front = profile.cabin_front * length;
+  const float roof_bottom = at(0.93f);
+  AppendBox(mesh, {0.5f * (rear + front), 0.0f, 0.5f * (shoulder + roof_bottom)},
+            {0.5f * (front - rear), 0.43f * width, 0.5f * (roof_bottom - shoulder)}, glass);
+  AppendBox(mesh, {0.5f * (rear + front), 0.0f, 0.5f * (roof_bottom + at(1.0f))},
+            {0.5f * (front - rear) - 0.01f * length, 0.45f * width, 0.5f * (at(1.0f) - roof_bottom)}, color);
+  const float lamp_z = at(profile.shoulder - 0.12f);
+  for (float y : {-0.33f * width, 0.33f * width}) {
+    AppendBox(mesh, {0.5f * length - lamp_half.x(), y, lamp_z}, lamp_half, headlight);
+    AppendBox(mesh, {-0.5f * length + lamp_half.x(), y, lamp_z}, lamp_half, taillight);
+  }
   return Labelled(std::move(mesh), SemanticClass::kCar);
 }
 

@@ -23,10 +23,17 @@ Mesh MakeGroundPlane(float half_size, const Eigen::Vector3f& color);
 Mesh MakeRoadLoop(const std::vector<Eigen::Vector2f>& closed_centerline, float lane_width,
                   const Eigen::Vector3f& asphalt, const Eigen::Vector3f& marking);
 
-// A car: wheels, body and a cabin, x forward. Its bounds are exactly
-// [-length/2, length/2] x [-width/2, width/2] x [-height/2, height/2], so a
-// physics box with those half extents matches it. 72 triangles.
-Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f& color);
+// Body styles of cars; every style fills the same bounds, so one physics box
+// and one 3D box serve all of them.
+enum class CarStyle { kSedan, kHatchback, kEstate, kSuv, kVan, kPickup };
+inline constexpr int kCarStyleCount = 6;
+
+// A car: wheels, painted body, glasshouse and roof, head- and tail-lamps,
+// x forward. Its bounds are exactly [-length/2, length/2] x [-width/2,
+// width/2] x [-height/2, height/2], so a physics box with those half
+// extents matches it. 120 triangles.
+Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f& color,
+                 CarStyle style = CarStyle::kHatchback);
 
 // A quadrotor: a hub, two crossed arms of length `span` along the diagonals
 // and four flat rotor blocks at the arm tips, centred at the origin. 84 triangles.

@@ -23,27 +23,25 @@ const Vector3f& Pick(const std::array<Vector3f, N>& palette, uint32_t variant, u
   return mapmesh::Pick(palette, variant, 0, salt);
 }
 
-// A box of walls with two dark ribbon-window bands and a gabled roof along
-// the long (x) axis, all inside the footprint and exactly as tall as ShapeOf.
+// A box of walls and a gabled roof along the long (x) axis, all inside the
+// footprint and exactly as tall as ShapeOf.
 Mesh MakeHouse(uint32_t variant) {
   static const std::array<Vector3f, 6> kWalls = {Vector3f(0.75f, 0.66f, 0.50f), Vector3f(0.56f, 0.56f, 0.55f),
                                                  Vector3f(0.70f, 0.48f, 0.24f), Vector3f(0.48f, 0.53f, 0.60f),
                                                  Vector3f(0.50f, 0.22f, 0.14f), Vector3f(0.80f, 0.78f, 0.72f)};
   static const std::array<Vector3f, 4> kRoofs = {Vector3f(0.40f, 0.10f, 0.05f), Vector3f(0.11f, 0.11f, 0.12f),
                                                  Vector3f(0.22f, 0.12f, 0.07f), Vector3f(0.10f, 0.13f, 0.19f)};
-  const Vector3f glass(0.05f, 0.07f, 0.10f);
   const Vector3f& wall = Pick(kWalls, variant, 1);
   const Vector3f& roof = Pick(kRoofs, variant, 2);
   const map::ObjectShape& shape = map::ShapeOf(ObjectKind::kHouse);
   const auto hx = static_cast<float>(shape.half_x), hy = static_cast<float>(shape.half_y);
   const auto top = static_cast<float>(shape.height);
   const float eaves = top - 1.6f;
-  // The window bands stand 5 cm proud of the walls (clear of z-fighting at
-  // 100 m and more), so the walls are 5 cm inside the footprint.
+  // Windows, doors and floors are drawn by the RGB shader (shading.h,
+  // Facade), so the walls are one box, 5 cm inside the footprint.
   const float inset = 0.05f;
   Mesh mesh;
   AddBox(mesh, {0, 0, eaves / 2}, {hx - inset, hy - inset, eaves / 2}, wall);
-  for (float band_middle : {1.6f, 4.0f}) AddBox(mesh, {0, 0, band_middle}, {hx, hy, 0.55f}, glass);
   mapmesh::AddFlatQuad(
       mesh, {Vector3f(-hx, -hy, eaves), Vector3f(hx, -hy, eaves), Vector3f(hx, 0, top), Vector3f(-hx, 0, top)}, roof);
   mapmesh::AddFlatQuad(

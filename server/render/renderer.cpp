@@ -14,6 +14,8 @@
 #include "server/render/camera_math.h"
 #include "server/render/channel_program.h"
 #include "server/render/gl_program.h"
+#include "server/render/shadow_map.h"
+#include "server/render/sky_pass.h"
 
 namespace sim4cv::render {
 namespace {
@@ -22,11 +24,29 @@ namespace {
 // is cleared only once per 255 instances instead of once per instance.
 constexpr GLint kMaxStencilReference = 255;
 
+// The RGB channel's shadow map: 512 texels over 2x32 m of ground, 12.5 cm a texel.
+constexpr GLsizei kShadowMapSize = 512;
+constexpr float kShadowRadiusM = 32.0f;
+
+// Flat ground (road, sidewalk, terrain, markings) receives shadows but casts
+// none worth drawing: leaving it out of the shadow pass saves most of its fill.
+bool FlatGround(uint32_t semantic) {
+  using semantic::SemanticClass;
+  for (SemanticClass ground : {SemanticClass::kRoad, SemanticClass::kSidewalk, SemanticClass::kTerrain,
+                               SemanticClass::kLaneMarking, SemanticClass::kCrosswalk}) {
+    if (semantic == static_cast<uint32_t>(ground)) return true;
+  }
+  return false;
+}
+
+constexpr std::size_t kRgbPlane = *channels::IndexOf(proto::CHANNEL_RGB);
+
 struct MeshRange {
   GLsizei index_count = 0;
   size_t first_index = 0;
   Eigen::Vector3f sphere_center = Eigen::Vector3f::Zero();  // model frame
   float sphere_radius = 0.0f;
+  bool casts_shadow = false;  // has a vertex that is not FlatGround
 };
 
 MeshRange BoundingSphere(const Mesh& mesh) {
@@ -68,8 +88,10 @@ struct Renderer::Impl {
   uint32_t max_height = 0;
   std::vector<MeshRange> meshes;
 
-  // Built the first time a set of channels is drawn (bit i: plane i).
-  std::array<std::unique_ptr<ChannelProgram>, (1u << channels::kPixelChannelCount)> programs;
+  // Built the first time a set of channels is drawn in a look: index = plane
+  // bits + kPlaneSets * RgbLook.
+  static constexpr uint32_t kPlaneSets = 1u << channels::kPixelChannelCount;
+  std::array<std::unique_ptr<ChannelProgram>, kPlaneSets * ChannelProgram::kRgbLooks> programs;
   const ChannelProgram* program = nullptr;  // of the frame being drawn
   GLuint vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
   GLuint framebuffer = 0;
@@ -77,6 +99,11 @@ struct Renderer::Impl {
   std::array<GLuint, channels::kPixelChannelCount> color_targets{};
   GLuint depth_stencil_target = 0;
   std::vector<GLuint> queries;  // grows to the most instances seen in a frame
+
+  Look look = LookOf(conditions::Conditions{});
+  // Made the first time the full look draws RGB (with shadows, for the map).
+  std::unique_ptr<ShadowMap> shadow_map;
+  std::unique_ptr<SkyPass> sky;
 
   // Per-frame scratch, kept to avoid allocating once warmed up.
   std::vector<uint32_t> labelled_drawn;  // indices of labelled items that survived culling
@@ -100,11 +127,13 @@ struct Renderer::Impl {
   void UploadMeshes(const std::vector<Mesh>& all_meshes);
   void CreateFramebuffer();
   // Makes the program and render targets for `planes` current.
-  void UsePlanes(PlaneSet planes);
+  void UsePlanes(PlaneSet planes, ChannelProgram::RgbLook look);
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
   void Draw(const DrawItem& item) const;
   void DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
                  std::span<uint32_t> unoccluded_pixels);
+  // Draws the sun's shadow map of `items` for `camera`; how to sample it.
+  ShadowSampling DrawShadows(const CameraView& camera, std::span<const DrawItem> items);
   void ReadBack(const CameraView& camera, const FrameBuffers& out) const;
   void CountUnoccludedPixels(std::span<const DrawItem> items, std::span<uint32_t> unoccluded_pixels);
 };
@@ -114,6 +143,8 @@ void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
   std::vector<uint32_t> indices;
   for (const Mesh& mesh : all_meshes) {
     MeshRange range = BoundingSphere(mesh);
+    range.casts_shadow = std::any_of(mesh.vertices.begin(), mesh.vertices.end(),
+                                     [](const Vertex& v) { return !FlatGround(v.semantic); });
     range.first_index = indices.size();
     range.index_count = static_cast<GLsizei>(mesh.indices.size());
     const auto base_vertex = static_cast<uint32_t>(vertices.size());
@@ -156,7 +187,7 @@ void Renderer::Impl::CreateFramebuffer() {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_target);
 }
 
-void Renderer::Impl::UsePlanes(PlaneSet planes) {
+void Renderer::Impl::UsePlanes(PlaneSet planes, ChannelProgram::RgbLook look) {
   std::array<GLenum, channels::kPixelChannelCount> draw_buffers{};
   for (GLuint i = 0; i < channels::kPixelChannelCount; ++i) {
     draw_buffers[i] = GL_NONE;
@@ -174,8 +205,8 @@ void Renderer::Impl::UsePlanes(PlaneSet planes) {
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
     throw std::runtime_error("renderer framebuffer is incomplete");
   }
-  auto& cached = programs[planes];
-  if (!cached) cached = std::make_unique<ChannelProgram>(planes);  // once per set of channels
+  auto& cached = programs[planes + kPlaneSets * static_cast<uint32_t>(look)];
+  if (!cached) cached = std::make_unique<ChannelProgram>(planes, look);  // once per set of channels and look
   program = cached.get();
   glUseProgram(program->id());
 }
@@ -230,10 +261,35 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
     SIM4CV_THROW_UNLESS(unoccluded_pixels.empty() || item.instance < unoccluded_pixels.size(),
                         "instance " << item.instance << " does not fit unoccluded_pixels of size "
                                     << unoccluded_pixels.size());
-    if (meshes[item.mesh].index_count == 0 || !InFrustum(item, planes)) continue;
-    Draw(item);
-    if (item.instance != kUnlabelled) labelled_drawn.push_back(i);
   }
+  // Objects first, flat ground last: the depth test then rejects the ground
+  // under the objects before its fragments are shaded (llvmpipe tests depth
+  // early), instead of shading those pixels twice.
+  for (const bool ground_pass : {false, true}) {
+    for (uint32_t i = 0; i < items.size(); ++i) {
+      const DrawItem& item = items[i];
+      const MeshRange& mesh = meshes[item.mesh];
+      if (mesh.casts_shadow == ground_pass || mesh.index_count == 0 || !InFrustum(item, planes)) continue;
+      Draw(item);
+      if (item.instance != kUnlabelled) labelled_drawn.push_back(i);
+    }
+  }
+}
+
+ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<const DrawItem> items) {
+  if (!shadow_map) shadow_map = std::make_unique<ShadowMap>(kShadowMapSize, kShadowRadiusM);
+  const Eigen::Matrix4f clip_from_world = shadow_map->Fit(camera, look.to_sun);
+  const auto planes = FrustumPlanes(clip_from_world);
+  shadow_map->Begin(clip_from_world);
+  const GLint u_model = shadow_map->ModelLocation();
+  for (const DrawItem& item : items) {
+    if (item.mesh >= meshes.size() || !meshes[item.mesh].casts_shadow || !InFrustum(item, planes)) continue;
+    const MeshRange& mesh = meshes[item.mesh];
+    glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
+    glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(mesh.first_index * sizeof(uint32_t)));
+  }
+  return shadow_map->End(clip_from_world);
 }
 
 void Renderer::Impl::ReadBack(const CameraView& camera, const FrameBuffers& out) const {
@@ -303,6 +359,8 @@ Renderer::Renderer(const std::vector<Mesh>& meshes, uint32_t max_width, uint32_t
 
 Renderer::~Renderer() = default;
 
+void Renderer::SetLook(const Look& look) { impl_->look = look; }
+
 void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
                       std::span<uint32_t> unoccluded_pixels) {
   Impl& gl = *impl_;
@@ -318,29 +376,43 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   // image's top row first in glReadPixels. The mirror also reverses winding.
   const Eigen::Matrix4f top_row_first = Eigen::Vector4f(1.0f, -1.0f, 1.0f, 1.0f).asDiagonal() * projection;
   const Eigen::Matrix4f previous_view_projection = top_row_first * RigidInverse(camera.previous_world_from_camera);
-  const Eigen::Vector3f to_light = Eigen::Vector3f(-0.4f, 0.3f, 0.85f).normalized();
+  // The fast look keeps its fixed light; the full look's comes from the sun (look.h).
+  const Eigen::Vector3f to_light =
+      gl.look.full ? gl.look.to_sun : Eigen::Vector3f(-0.4f, 0.3f, 0.85f).normalized();
   const Eigen::Vector2f viewport(static_cast<float>(camera.width), static_cast<float>(camera.height));
   PlaneSet planes = 0;
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     if (out[i] != nullptr) planes |= 1u << i;
   }
   if (planes == 0) return;  // nothing asked for: nothing drawn
+  const bool full_rgb = gl.look.full && (planes & (1u << kRgbPlane)) != 0;
+  const Eigen::Vector3f camera_position = camera.world_from_camera.block<3, 1>(0, 3);
+
+  glBindVertexArray(gl.vertex_array);
+  ShadowSampling shadow;
+  if (full_rgb && gl.look.shadows) shadow = gl.DrawShadows(camera, items);
 
   glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer);
   glViewport(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height));
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CW);
-  gl.UsePlanes(planes);
+  using RgbLook = ChannelProgram::RgbLook;
+  gl.UsePlanes(planes, !full_rgb ? RgbLook::kFast : shadow.texture != 0 ? RgbLook::kFullShadowed : RgbLook::kFull);
   const ChannelProgram& program = *gl.program;
-  glBindVertexArray(gl.vertex_array);
   glUniformMatrix4fv(program.u_view, 1, GL_FALSE, view.data());
   glUniformMatrix4fv(program.u_projection, 1, GL_FALSE, top_row_first.data());
   glUniformMatrix4fv(program.u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
   glUniform3fv(program.u_to_light, 1, to_light.data());
   glUniform2fv(program.u_viewport, 1, viewport.data());
+  if (full_rgb) program.look.Apply(gl.look, camera_position, shadow);
 
   gl.DrawScene(items, FrustumPlanes(projection * view), unoccluded_pixels);
+  if (full_rgb) {
+    if (!gl.sky) gl.sky = std::make_unique<SkyPass>();
+    gl.sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * view, camera_position, gl.look);
+    glUseProgram(program.id());  // the counting pass draws with the scene's program
+  }
   gl.ReadBack(camera, out);
   if (!unoccluded_pixels.empty()) gl.CountUnoccludedPixels(items, unoccluded_pixels);
   ThrowOnGlError("Renderer::Render");

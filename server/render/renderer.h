@@ -10,6 +10,7 @@
 #include <span>
 #include <vector>
 
+#include "server/render/look.h"
 #include "server/render/render_types.h"
 
 namespace sim4cv::render {
@@ -31,6 +32,10 @@ class Renderer {
   // No heap allocation once each set of channels has been drawn once.
   void Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
               std::span<uint32_t> unoccluded_pixels);
+
+  // How later frames' RGB is lit and shaded (look.h); the other channels
+  // never depend on it. The default is LookOf(conditions::Conditions{}).
+  void SetLook(const Look& look);
 
  private:
   struct Impl;

@@ -26,8 +26,9 @@ TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const traffic
                                  const AddMesh& add_mesh, const AddStatic& add_static)
     : plan_(plan), car_half_extents_(car_half_extents), car_centre_height_(car_centre_height) {
   const Eigen::Vector3f car_size = 2.0f * car_half_extents.cast<float>();
-  for (int i = 0; i < kCarColours; ++i) {
-    car_meshes_[i] = add_mesh(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), TrafficCarColour(i)));
+  for (int i = 0; i < kCarVariants; ++i) {
+    car_meshes_[i] = add_mesh(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), TrafficCarColour(i),
+                                          static_cast<CarStyle>(i % kCarStyleCount)));
   }
   for (int i = 0; i < kWalkerLooks; ++i) walker_meshes_[i] = add_mesh(MakePedestrianMesh(static_cast<uint32_t>(i)));
   for (const traffic::Signal signal : {traffic::Signal::kGreen, traffic::Signal::kYellow, traffic::Signal::kRed}) {
@@ -39,7 +40,7 @@ TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const traffic
   auto id = static_cast<InstanceId>(ids.parked);
   for (std::size_t i = 0; i < plan.parked_cars().size(); ++i) {
     const traffic::Pose2& parked = plan.parked_cars()[i];
-    add_static(car_meshes_[i % kCarColours], id++, proto::OBJECT_CLASS_CAR,
+    add_static(car_meshes_[i % kCarVariants], id++, proto::OBJECT_CLASS_CAR,
                GroundPose(parked.position, parked.heading, car_centre_height));
   }
   if (!plan.lights().empty()) {
@@ -77,7 +78,7 @@ void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time
   };
   for (std::size_t i = 0; i < state.cars.size(); ++i) {
     const traffic::MovingCar& car = state.cars[i];
-    add(car_meshes_[(i + plan_.parked_cars().size()) % kCarColours], first_moving_car_ + static_cast<InstanceId>(i),
+    add(car_meshes_[(i + plan_.parked_cars().size()) % kCarVariants], first_moving_car_ + static_cast<InstanceId>(i),
         proto::OBJECT_CLASS_CAR, car.position, car.heading, car_centre_height_, car_centre_height_, car_half_extents_,
         car.linear_velocity, car.yaw_rate);
   }

@@ -40,7 +40,7 @@ class TrafficGraphics {
   InstanceId id_bound() const { return id_bound_; }
 
  private:
-  static constexpr int kCarColours = 8;
+  static constexpr int kCarVariants = 24;  // colour i and style i % kCarStyleCount
   static constexpr int kWalkerLooks = 6;
 
   const traffic::TrafficPlan& plan_;
@@ -49,7 +49,7 @@ class TrafficGraphics {
   std::vector<Eigen::Matrix4f> light_poses_;
   std::vector<InstanceId> light_ids_;
   std::array<MeshId, 3> lamp_meshes_{};  // by traffic::Signal
-  std::array<MeshId, kCarColours> car_meshes_{};
+  std::array<MeshId, kCarVariants> car_meshes_{};
   std::array<MeshId, kWalkerLooks> walker_meshes_{};
   InstanceId first_moving_car_ = 0, first_walker_ = 0, id_bound_ = 0;
 };

@@ -137,19 +137,27 @@ Mesh MakeCrosswalkMarkings(const std::vector<traffic::TrafficPlan::Crosswalk>& c
 }
 
 Eigen::Vector3f TrafficCarColour(uint32_t variant) {
-  static const std::array<Vector3f, 10> kColours = {
-      Vector3f(0.85f, 0.85f, 0.83f),  // white
-      Vector3f(0.05f, 0.05f, 0.06f),  // black
-      Vector3f(0.55f, 0.56f, 0.58f),  // silver
-      Vector3f(0.28f, 0.29f, 0.30f),  // grey
-      Vector3f(0.10f, 0.18f, 0.38f),  // dark blue
-      Vector3f(0.40f, 0.05f, 0.08f),  // maroon
-      Vector3f(0.12f, 0.28f, 0.16f),  // dark green
-      Vector3f(0.70f, 0.62f, 0.45f),  // beige
-      Vector3f(0.88f, 0.70f, 0.10f),  // yellow
-      Vector3f(0.30f, 0.45f, 0.60f),  // steel blue
+  // Weighted like the colours of cars on European roads: mostly white,
+  // black, grey and silver, a few coloured ones. Consecutive variants step
+  // through the table by 7 (coprime to its 25 entries), so neighbours differ.
+  static const std::array<Vector3f, 25> kColours = {
+      Vector3f(0.85f, 0.85f, 0.83f), Vector3f(0.85f, 0.85f, 0.83f), Vector3f(0.85f, 0.85f, 0.83f),  // white
+      Vector3f(0.92f, 0.92f, 0.90f), Vector3f(0.80f, 0.81f, 0.80f),                                  // white
+      Vector3f(0.04f, 0.04f, 0.05f), Vector3f(0.05f, 0.05f, 0.06f), Vector3f(0.03f, 0.03f, 0.035f),  // black
+      Vector3f(0.07f, 0.07f, 0.08f),                                                                 // black
+      Vector3f(0.55f, 0.56f, 0.58f), Vector3f(0.60f, 0.61f, 0.62f), Vector3f(0.50f, 0.51f, 0.53f),  // silver
+      Vector3f(0.58f, 0.58f, 0.56f),                                                                 // silver
+      Vector3f(0.28f, 0.29f, 0.30f), Vector3f(0.22f, 0.23f, 0.25f), Vector3f(0.33f, 0.33f, 0.34f),  // grey
+      Vector3f(0.26f, 0.26f, 0.26f),                                                                 // grey
+      Vector3f(0.10f, 0.18f, 0.38f), Vector3f(0.30f, 0.45f, 0.60f),                                  // blues
+      Vector3f(0.40f, 0.05f, 0.08f),                                                                 // maroon
+      Vector3f(0.12f, 0.28f, 0.16f),                                                                 // dark green
+      Vector3f(0.70f, 0.62f, 0.45f),                                                                 // beige
+      Vector3f(0.88f, 0.70f, 0.10f),                                                                 // yellow
+      Vector3f(0.35f, 0.20f, 0.12f),                                                                 // brown
+      Vector3f(0.95f, 0.40f, 0.05f),                                                                 // orange
   };
-  return kColours[variant % kColours.size()];
+  return kColours[(variant * 7u) % kColours.size()];
 }
 
 }  // namespace sim4cv::render

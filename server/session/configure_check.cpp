@@ -4,6 +4,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "protocol/conditions.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
 #include "server/session/entity_kinds_wire.h"
@@ -176,6 +177,18 @@ std::string CheckQueryRoad(const proto::QueryRoad& query) {
   return check.problem();
 }
 
+std::string CheckSetConditions(const proto::SetConditions& request) {
+  Checker check;
+  check.True(request.preset().empty() || conditions::FindByName(request.preset()).has_value(), [&] {
+    return "SetConditions.preset " + Quoted(request.preset()) + " is not a preset; use one of " + conditions::Names();
+  });
+  if (request.has_hour()) check.Range("SetConditions.hour", request.hour(), conditions::kMinHour, conditions::kMaxHour);
+  check.True(request.quality().empty() || conditions::FindQuality(request.quality()).has_value(), [&] {
+    return "SetConditions.quality " + Quoted(request.quality()) + " is not a quality; use \"full\" or \"fast\"";
+  });
+  return check.problem();
+}
+
 }  // namespace
 
 std::string CheckConfigure(const proto::Configure& request) {
@@ -195,6 +208,8 @@ std::string CheckConfigure(const proto::Configure& request) {
       return Checker().Name("RemoveCamera.name", request.remove_camera().name(), false).problem();
     case Kind::kQueryRoad:
       return CheckQueryRoad(request.query_road());
+    case Kind::kSetConditions:
+      return CheckSetConditions(request.set_conditions());
     case Kind::kRemove:
     case Kind::kReset:
     case Kind::kGetWorld:

@@ -170,6 +170,25 @@ TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
   EXPECT_FALSE(ParseFlags({"--help", "--bogus"}, help).has_value());
 }
 
+TEST(ConfigTest, ConditionsFlags) {
+  const Config defaults = Parse({});
+  EXPECT_EQ(defaults.conditions.preset, conditions::Preset::CLEAR_NOON);
+  EXPECT_EQ(defaults.conditions.hour, conditions::Info(conditions::Preset::CLEAR_NOON).hour);
+  EXPECT_EQ(defaults.conditions.quality, conditions::Quality::kFull);
+  const Config rain = Parse({"--conditions", "rain"});
+  EXPECT_EQ(rain.conditions.preset, conditions::Preset::RAIN);
+  EXPECT_EQ(rain.conditions.hour, conditions::Info(conditions::Preset::RAIN).hour) << "the preset's own hour";
+  // --hour wins wherever it stands.
+  const Config late = Parse({"--hour", "21.5", "--conditions", "fog", "--quality", "fast"});
+  EXPECT_EQ(late.conditions.preset, conditions::Preset::FOG);
+  EXPECT_EQ(late.conditions.hour, 21.5);
+  EXPECT_EQ(late.conditions.quality, conditions::Quality::kFast);
+  ExpectMentions(ParseError({"--conditions", "sunny"}), {"--conditions 'sunny' is not a preset", "clear_noon", "rain"});
+  ExpectMentions(ParseError({"--hour", "25"}), {"--hour is 25", "[0, 24]"});
+  ExpectMentions(ParseError({"--hour", "-1"}), {"--hour"});
+  ExpectMentions(ParseError({"--quality", "medium"}), {"--quality 'medium' is not a quality", "full or fast"});
+}
+
 TEST(ConfigTest, UnknownFlagIsNamed) {
   ExpectMentions(ParseError({"--widht", "100"}), {"unknown flag '--widht'", "--help"});
   ExpectMentions(ParseError({"width", "100"}), {"unknown flag 'width'"});

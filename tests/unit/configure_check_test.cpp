@@ -41,6 +41,24 @@ TEST(ConfigureCheckTest, GoodRequestsPass) {
   }
 }
 
+TEST(ConfigureCheckTest, ConditionsAreNamedWithTheValidChoices) {
+  proto::Configure request;
+  request.mutable_set_conditions()->set_preset("night");
+  request.mutable_set_conditions()->set_hour(0.5);
+  request.mutable_set_conditions()->set_quality("fast");
+  EXPECT_EQ(CheckConfigure(request), "");
+  request.mutable_set_conditions()->set_preset("snow");
+  ExpectProblem(request, "SetConditions.preset 'snow' is not a preset; use one of clear_noon, clear_morning");
+  request.mutable_set_conditions()->set_preset("");
+  request.mutable_set_conditions()->set_hour(24.5);
+  ExpectProblem(request, "SetConditions.hour is 24.5; it must be a finite number in [0, 24]");
+  request.mutable_set_conditions()->set_hour(std::nan(""));
+  ExpectProblem(request, "SetConditions.hour is nan");
+  request.mutable_set_conditions()->clear_hour();
+  request.mutable_set_conditions()->set_quality("ultra");
+  ExpectProblem(request, "SetConditions.quality 'ultra' is not a quality");
+}
+
 TEST(ConfigureCheckTest, EachBadFieldIsNamedWithItsValue) {
   ExpectProblem(proto::Configure{}, "carries no request");
   proto::Configure request;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <Eigen/Geometry>
 #include <numbers>
 
@@ -84,6 +86,32 @@ TEST(MeshBuilder, CarFillsExactlyItsBoundingBox) {
   ExpectWellFormed(car, 200);
   EXPECT_TRUE(Bounds(car).min().isApprox(Eigen::Vector3f(-2.1f, -0.9f, -0.75f)));
   EXPECT_TRUE(Bounds(car).max().isApprox(Eigen::Vector3f(2.1f, 0.9f, 0.75f)));
+}
+
+TEST(MeshBuilder, EveryCarStyleFillsExactlyTheSameBounds) {
+  // One physics box and one 3D box serve every style, so each must reach all six faces.
+  for (int style = 0; style < kCarStyleCount; ++style) {
+    SCOPED_TRACE(style);
+    const Mesh car = MakeCarMesh(4.5f, 1.8f, 1.5f, {0.8f, 0.8f, 0.8f}, static_cast<CarStyle>(style));
+    ExpectWellFormed(car, 200);
+    EXPECT_TRUE(Bounds(car).min().isApprox(Eigen::Vector3f(-2.25f, -0.9f, -0.75f))) << Bounds(car).min();
+    EXPECT_TRUE(Bounds(car).max().isApprox(Eigen::Vector3f(2.25f, 0.9f, 0.75f))) << Bounds(car).max();
+    for (const Vertex& v : car.vertices) EXPECT_EQ(v.semantic, static_cast<uint32_t>(SemanticClass::kCar));
+  }
+  // Different silhouettes: the roof's length tells a van from a sedan from a pickup.
+  const auto cabin_length = [](CarStyle style) {
+    const Mesh car = MakeCarMesh(4.5f, 1.8f, 1.5f, {0.8f, 0.8f, 0.8f}, style);
+    float low = 10, high = -10;
+    for (const Vertex& v : car.vertices) {
+      if (v.position[2] > 0.7f) {  // the roof
+        low = std::min(low, v.position[0]);
+        high = std::max(high, v.position[0]);
+      }
+    }
+    return high - low;
+  };
+  EXPECT_GT(cabin_length(CarStyle::kVan), cabin_length(CarStyle::kSedan) + 1.0f);
+  EXPECT_LT(cabin_length(CarStyle::kPickup), cabin_length(CarStyle::kSedan));
 }
 
 TEST(MeshBuilder, UavIsCentredAndWithinItsSpan) {

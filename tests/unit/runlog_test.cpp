@@ -85,6 +85,21 @@ TEST(RunLog, RoundTripsHeaderAndManyRecordsBitExactly) {
   EXPECT_EQ(reader.ignored_bytes(), 0u);
 }
 
+TEST(RunLog, HeadersWrittenBeforeConditionsExistedStillDecode) {
+  RunLogHeader old = TestHeader();
+  old.conditions.clear();
+  std::vector<uint8_t> bytes;
+  codec::EncodeFileStart(old, &bytes);
+  // The payload after the preamble and its frame header, without the
+  // trailing conditions string (a u16 length of 0): what older writers wrote.
+  const std::span<const uint8_t> payload(bytes.data() + codec::kPreambleBytes + codec::kFrameHeaderBytes,
+                                         bytes.size() - codec::kPreambleBytes - codec::kFrameHeaderBytes - sizeof(uint16_t));
+  RunLogHeader decoded;
+  ASSERT_TRUE(codec::DecodeHeader(payload, &decoded));
+  EXPECT_EQ(decoded, old);
+  EXPECT_EQ(decoded.conditions, "");
+}
+
 TEST(RunLog, KeepsAwkwardDoublesBitForBit) {
   FrameLogRecord awkward = TestRecord(7, 0);
   const double values[] = {-0.0, std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::infinity(),

@@ -30,6 +30,7 @@ inline RunLogHeader TestHeader() {
   header.physics_hz = 240.0;
   header.frame_hz = 30.0;
   header.seed = 0xDEADBEEFCAFEull;
+  header.conditions = "rain at 15.00 h, full quality";
   header.entities = {{1, "car", kEntityKindCar, kObjectClassCar},
                      {2, "uav", kEntityKindUav, kObjectClassUav},
                      {3, "uav_b", kEntityKindUav, kObjectClassUav}};

@@ -52,6 +52,42 @@ proto::Configure AddCamera(const std::string& name, const std::string& mount) {
   return request;
 }
 
+TEST_F(SimulationTest, SetConditionsChangesTheLookAndReportsItInTheWorld) {
+  proto::Configure request;
+  request.mutable_set_conditions()->set_preset("dusk");
+  const Simulation::Change change = Apply(request);
+  EXPECT_TRUE(change.new_conditions);
+  EXPECT_FALSE(change.new_scene);
+  EXPECT_EQ(sim_.conditions().preset, conditions::Preset::DUSK);
+  EXPECT_EQ(answer_.world().conditions().preset(), "dusk");
+  EXPECT_EQ(answer_.world().conditions().hour(), conditions::Info(conditions::Preset::DUSK).hour);
+  EXPECT_EQ(answer_.world().conditions().quality(), "full");
+  // Only the hour: the preset stays.
+  request.mutable_set_conditions()->clear_preset();
+  request.mutable_set_conditions()->set_hour(6.25);
+  request.mutable_set_conditions()->set_quality("fast");
+  Apply(request);
+  EXPECT_EQ(answer_.world().conditions().preset(), "dusk");
+  EXPECT_EQ(answer_.world().conditions().hour(), 6.25);
+  EXPECT_EQ(answer_.world().conditions().quality(), "fast");
+}
+
+TEST_F(SimulationTest, SetConditionsIsRefusedWhileLogging) {
+  Config logging;
+  logging.log_file = "/tmp/never-written.s4log";  // Simulation only reads the flag
+  Simulation sim(logging, std::make_shared<const sim::Scene>(sim::DefaultScene(320, 180)));
+  proto::Configure request;
+  request.mutable_set_conditions()->set_preset("night");
+  try {
+    sim.Apply(request, answer_);
+    ADD_FAILURE() << "accepted while logging";
+  } catch (const ConfigureError& error) {
+    EXPECT_EQ(error.code(), proto::ERROR_CODE_INVALID_STATE);
+    EXPECT_NE(std::string(error.what()).find("a log holds one look"), std::string::npos) << error.what();
+  }
+  EXPECT_EQ(sim.conditions().preset, conditions::Preset::CLEAR_NOON);
+}
+
 TEST_F(SimulationTest, SpawnAnswersTheIdAndTheWorld) {
   Apply(SpawnUav("scout"));
   EXPECT_EQ(answer_.request_id(), 5u);

@@ -85,6 +85,7 @@ void PutHeader(Sink& out, const RunLogHeader& header) {
     out.Put(camera.height);
     out.PutString(camera.name);
   }
+  out.PutString(header.conditions);  // last, so older readers' logs (without it) still decode
 }
 
 template <typename Sink>
@@ -204,7 +205,8 @@ bool DecodeHeader(std::span<const uint8_t> payload, RunLogHeader* out) {
          in.GetString(&out->label) && in.GetString(&out->scene_name) && in.GetString(&out->map_path) &&
          in.Get(&out->physics_hz) && in.Get(&out->frame_hz) && in.Get(&out->seed) &&
          GetList(in, kMinLogEntityBytes, &out->entities, get_entity) &&
-         GetList(in, kMinLogCameraBytes, &out->cameras, get_camera) && in.remaining() == 0;
+         GetList(in, kMinLogCameraBytes, &out->cameras, get_camera) &&
+         (in.remaining() == 0 || in.GetString(&out->conditions)) && in.remaining() == 0;
 }
 
 bool DecodeRecord(std::span<const uint8_t> payload, FrameLogRecord* out) {

@@ -67,6 +67,9 @@ struct RunLogHeader {
   double physics_hz = 0.0;
   double frame_hz = 0.0;
   uint64_t seed = 0;
+  // How the images looked, e.g. "rain at 15.00 h, full quality"
+  // (protocol/conditions.h Describe); empty in logs written before it existed.
+  std::string conditions;
   std::vector<LogEntity> entities;
   std::vector<LogCamera> cameras;  // GroundTruthBoxLog::camera indexes this
 

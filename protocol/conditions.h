@@ -1,0 +1,95 @@
+// The weather and time-of-day presets, listed once. The daemon's
+// --conditions flag, Configure.set_conditions, run logs, dataset metadata,
+// the renderer's look (server/render/look.cpp) and the docs read this table.
+#pragma once
+
+#include <array>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace sim4cv::conditions {
+
+// X(ENUM, name, hour, what it looks like): hour is the preset's time of
+// day (0..24, local solar time) unless a client or --hour overrides it.
+#define SIM4CV_CONDITIONS(X)                                                                        \
+  X(CLEAR_NOON, "clear_noon", 12.5, "high sun, short hard shadows, blue sky")                       \
+  X(CLEAR_MORNING, "clear_morning", 7.5, "low warm sun from the east, long shadows")               \
+  X(OVERCAST, "overcast", 12.0, "no direct sun, soft shadowless light, grey sky")                  \
+  X(FOG, "fog", 10.0, "overcast with fog, visibility about 80 m")                                   \
+  X(DUSK, "dusk", 17.8, "sun on the horizon, orange sky, dim light")                                \
+  X(NIGHT, "night", 23.0, "dark sky, moonlight, street lanterns and car lights")                   \
+  X(RAIN, "rain", 15.0, "overcast, wet dark asphalt that mirrors the sky, light haze")
+
+enum class Preset {
+#define SIM4CV_CONDITIONS_ENUM(ENUM, ...) ENUM,
+  SIM4CV_CONDITIONS(SIM4CV_CONDITIONS_ENUM)
+#undef SIM4CV_CONDITIONS_ENUM
+};
+
+struct PresetInfo {
+  Preset preset;
+  std::string_view name;  // in --conditions, Configure and logs
+  double hour;
+  std::string_view summary;
+};
+
+#define SIM4CV_CONDITIONS_INFO(ENUM, NAME, HOUR, SUMMARY) PresetInfo{Preset::ENUM, NAME, HOUR, SUMMARY},
+inline constexpr std::array kPresets = {SIM4CV_CONDITIONS(SIM4CV_CONDITIONS_INFO)};
+#undef SIM4CV_CONDITIONS_INFO
+
+inline constexpr double kMinHour = 0.0;
+inline constexpr double kMaxHour = 24.0;
+
+inline const PresetInfo& Info(Preset preset) { return kPresets[static_cast<std::size_t>(preset)]; }
+
+inline std::optional<Preset> FindByName(std::string_view name) {
+  for (const PresetInfo& info : kPresets) {
+    if (info.name == name) return info.preset;
+  }
+  return std::nullopt;
+}
+
+// "clear_noon, clear_morning, ...": for error messages and --help.
+inline std::string Names() {
+  std::string names;
+  for (const PresetInfo& info : kPresets) {
+    if (!names.empty()) names += ", ";
+    names += info.name;
+  }
+  return names;
+}
+
+// What the world looks like: a preset, its time of day, and how much of the
+// look is drawn. Plain data, so the sim thread, logs and the renderer share it.
+enum class Quality { kFast, kFull };
+
+struct Conditions {
+  Preset preset = Preset::CLEAR_NOON;
+  double hour = Info(Preset::CLEAR_NOON).hour;
+  Quality quality = Quality::kFull;
+};
+
+// The preset at its own hour.
+inline Conditions Of(Preset preset, Quality quality = Quality::kFull) {
+  return Conditions{preset, Info(preset).hour, quality};
+}
+
+inline std::string_view QualityName(Quality quality) { return quality == Quality::kFast ? "fast" : "full"; }
+
+inline std::optional<Quality> FindQuality(std::string_view name) {
+  if (name == "fast") return Quality::kFast;
+  if (name == "full") return Quality::kFull;
+  return std::nullopt;
+}
+
+// "rain at 15.00 h, full quality": for logs and run-log headers.
+inline std::string Describe(const Conditions& conditions) {
+  char hour[16];
+  std::snprintf(hour, sizeof hour, "%.2f", conditions.hour);
+  return std::string(Info(conditions.preset).name) + " at " + hour + " h, " +
+         std::string(QualityName(conditions.quality)) + " quality";
+}
+
+}  // namespace sim4cv::conditions

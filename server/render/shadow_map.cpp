@@ -1,0 +1,116 @@
+#include "server/render/shadow_map.h"
+
+#include <cmath>
+#include <Eigen/Geometry>
+#include <stdexcept>
+
+#include "server/render/gl_program.h"
+
+namespace sim4cv::render {
+namespace {
+
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+uniform mat4 u_model;
+uniform mat4 u_clip_from_world;
+void main() { gl_Position = u_clip_from_world * (u_model * vec4(a_position, 1.0)); }
+)";
+constexpr const char* kFragmentShader = R"(#version 330 core
+void main() {}
+)";
+
+// Sun-space depth kept around the fitted square: casters up to this far
+// towards the sun (tall buildings, UAVs) still cast.
+constexpr float kDepthRangeM = 400.0f;
+
+}  // namespace
+
+ShadowMap::ShadowMap(GLsizei size, float radius_m) : size_(size), radius_m_(radius_m) {
+  glGenTextures(1, &texture_);
+  glBindTexture(GL_TEXTURE_2D, texture_);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, size_, size_, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  glGenFramebuffers(1, &framebuffer_);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, texture_, 0);
+  glDrawBuffer(GL_NONE);
+  glReadBuffer(GL_NONE);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+    throw std::runtime_error("shadow map framebuffer is incomplete");
+  }
+  program_ = LinkProgram(kVertexShader, kFragmentShader);
+  u_model_ = RequireUniform(program_, "u_model");
+  u_clip_from_world_ = RequireUniform(program_, "u_clip_from_world");
+  ThrowOnGlError("ShadowMap setup");
+}
+
+ShadowMap::~ShadowMap() {
+  glDeleteProgram(program_);
+  glDeleteFramebuffers(1, &framebuffer_);
+  glDeleteTextures(1, &texture_);
+}
+
+Eigen::Matrix4f ShadowMap::Fit(const CameraView& camera, const Eigen::Vector3f& to_sun) const {
+  const Eigen::Vector3f eye = camera.world_from_camera.block<3, 1>(0, 3);
+  const Eigen::Vector3f forward = -camera.world_from_camera.block<3, 1>(0, 2);
+  // The square's centre: where the view meets the ground if it does nearby,
+  // else a radius ahead of the camera.
+  Eigen::Vector3f centre = eye + forward * radius_m_;
+  if (forward.z() < -0.05f) {
+    const float hit = -eye.z() / forward.z();
+    if (hit < radius_m_ * 1.5f) centre = eye + forward * hit;
+  }
+  centre.z() = 0.0f;
+  const Eigen::Vector3f z = to_sun.normalized();  // the sun looks along -z
+  const Eigen::Vector3f up = std::abs(z.z()) > 0.99f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitZ();
+  const Eigen::Vector3f x = up.cross(z).normalized();
+  const Eigen::Vector3f y = z.cross(x);
+  Eigen::Matrix4f sun_from_world = Eigen::Matrix4f::Identity();
+  sun_from_world.block<1, 3>(0, 0) = x.transpose();
+  sun_from_world.block<1, 3>(1, 0) = y.transpose();
+  sun_from_world.block<1, 3>(2, 0) = z.transpose();
+  // Snap the centre to whole texels in the sun's frame.
+  const float texel_m = 2.0f * radius_m_ / static_cast<float>(size_);
+  Eigen::Vector3f snapped(x.dot(centre), y.dot(centre), z.dot(centre));
+  snapped.x() = std::round(snapped.x() / texel_m) * texel_m;
+  snapped.y() = std::round(snapped.y() / texel_m) * texel_m;
+  sun_from_world.block<3, 1>(0, 3) = -snapped;
+  Eigen::Matrix4f ortho = Eigen::Matrix4f::Identity();
+  ortho(0, 0) = 1.0f / radius_m_;
+  ortho(1, 1) = 1.0f / radius_m_;
+  ortho(2, 2) = -1.0f / kDepthRangeM;  // z towards the sun is nearer
+  return ortho * sun_from_world;
+}
+
+void ShadowMap::Begin(const Eigen::Matrix4f& clip_from_world) const {
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  glViewport(0, 0, size_, size_);
+  glUseProgram(program_);
+  glUniformMatrix4fv(u_clip_from_world_, 1, GL_FALSE, clip_from_world.data());
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_STENCIL_TEST);
+  glDisable(GL_CULL_FACE);  // open meshes (ground, signs) cast from both sides
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.5f, 2.0f);  // against self-shadowing stripes
+  glClear(GL_DEPTH_BUFFER_BIT);
+}
+
+ShadowSampling ShadowMap::End(const Eigen::Matrix4f& clip_from_world) const {
+  glDisable(GL_POLYGON_OFFSET_FILL);
+  glActiveTexture(GL_TEXTURE0 + kShadowTextureUnit);
+  glBindTexture(GL_TEXTURE_2D, texture_);
+  glActiveTexture(GL_TEXTURE0);
+  Eigen::Matrix4f to_unit = Eigen::Matrix4f::Identity() * 0.5f;  // clip [-1,1] -> [0,1]
+  to_unit(3, 3) = 1.0f;
+  to_unit.block<3, 1>(0, 3).setConstant(0.5f);
+  return ShadowSampling{texture_, to_unit * clip_from_world, 1.0f / static_cast<float>(size_)};
+}
+
+}  // namespace sim4cv::render

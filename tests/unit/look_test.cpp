@@ -1,0 +1,242 @@
+// The conditions presets and the look they give (protocol/conditions.h,
+// server/render/look.h), and what the full look may and may not change on
+// the real OSMesa renderer: RGB only, deterministically; depth, masks,
+// visibility counts, semantic labels, normals and flow stay byte-identical
+// in every preset and quality.
+#include "server/render/look.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "protocol/conditions.h"
+#include "server/render/gl_context.h"
+#include "server/render/renderer.h"
+#include "server/render/scene_graphics.h"
+#include "server/sim/world.h"
+#include "tests/support/no_warnings.h"
+#include "tests/support/rendered_frame.h"
+#include "tests/unit/traffic_test_support.h"
+
+namespace sim4cv::render {
+namespace {
+
+using conditions::Preset;
+using conditions::Quality;
+
+TEST(ConditionsTest, PresetsAreListedOnceAndFoundByName) {
+  std::set<std::string> names;
+  for (const conditions::PresetInfo& info : conditions::kPresets) {
+    EXPECT_TRUE(names.insert(std::string(info.name)).second) << info.name;
+    EXPECT_EQ(conditions::FindByName(info.name), info.preset);
+    EXPECT_GE(info.hour, conditions::kMinHour);
+    EXPECT_LE(info.hour, conditions::kMaxHour);
+    EXPECT_NE(conditions::Names().find(info.name), std::string::npos);
+  }
+  EXPECT_GE(names.size(), 7u) << "clear noon, clear morning, overcast, fog, dusk, night, rain";
+  EXPECT_FALSE(conditions::FindByName("Clear_Noon").has_value());
+  EXPECT_EQ(conditions::Describe(conditions::Conditions{Preset::RAIN, 15.0, Quality::kFast}),
+            "rain at 15.00 h, fast quality");
+}
+
+TEST(LookTest, TheSunRisesInTheEastStandsSouthAtNoonAndSetsInTheWest) {
+  const auto sun = [](double hour) { return LookOf({Preset::CLEAR_NOON, hour, Quality::kFull}).to_sun; };
+  EXPECT_GT(sun(7.0).x(), 0.8f);
+  EXPECT_GT(sun(7.0).z(), 0.0f);
+  EXPECT_NEAR(sun(12.0).x(), 0.0f, 1e-5f);
+  EXPECT_LT(sun(12.0).y(), 0.0f);
+  EXPECT_NEAR(sun(12.0).z(), std::sin(65.0f * 3.14159265f / 180.0f), 1e-4f);
+  EXPECT_LT(sun(17.0).x(), -0.8f);
+  EXPECT_LT(sun(8.0).z(), sun(11.0).z()) << "lower in the morning: longer shadows";
+  const Look night = LookOf({Preset::CLEAR_NOON, 23.0, Quality::kFull});
+  EXPECT_GT(night.to_sun.z(), 0.0f) << "the moon lights the night";
+  EXPECT_FALSE(night.shadows);
+  EXPECT_EQ(night.lights, 1.0f);
+}
+
+TEST(LookTest, EachPresetLooksAsItsNameSays) {
+  const auto look = [](Preset preset) { return LookOf(conditions::Of(preset)); };
+  EXPECT_TRUE(look(Preset::CLEAR_NOON).shadows);
+  EXPECT_TRUE(look(Preset::CLEAR_MORNING).shadows);
+  EXPECT_FALSE(look(Preset::OVERCAST).shadows);
+  EXPECT_FALSE(look(Preset::FOG).shadows);
+  EXPECT_GT(look(Preset::FOG).fog_density, 5 * look(Preset::RAIN).fog_density) << "fog: about 100 m visibility";
+  EXPECT_GT(look(Preset::RAIN).fog_density, look(Preset::CLEAR_NOON).fog_density);
+  EXPECT_EQ(look(Preset::RAIN).wetness, 1.0f);
+  EXPECT_EQ(look(Preset::CLEAR_NOON).wetness, 0.0f);
+  EXPECT_LT(look(Preset::OVERCAST).sun.maxCoeff(), 0.5f * look(Preset::CLEAR_NOON).sun.maxCoeff());
+  EXPECT_GT(look(Preset::OVERCAST).clouds, look(Preset::CLEAR_NOON).clouds);
+  EXPECT_GT(look(Preset::DUSK).sun.x(), 1.5f * look(Preset::DUSK).sun.z()) << "warm light";
+  EXPECT_EQ(look(Preset::NIGHT).lights, 1.0f);
+  EXPECT_EQ(look(Preset::CLEAR_NOON).lights, 0.0f);
+  const Look fast = LookOf(conditions::Of(Preset::CLEAR_NOON, Quality::kFast));
+  EXPECT_FALSE(fast.full);
+  EXPECT_FALSE(fast.shadows);
+}
+
+// The densest urban map with traffic, stepped a few seconds, seen by each of
+// its cameras with every channel.
+class LookRenderTest : public ::testing::Test {
+ protected:
+  static constexpr uint32_t kWidth = 240, kHeight = 135;
+
+  static void SetUpTestSuite() {
+    scene_ = std::make_unique<sim::Scene>(sim::SceneFromMap(
+        (traffic::testing::SourceDir() / "scenes/driving/train/01_urban.map").string(), "", 8.0f, kWidth, kHeight));
+    sim::AddTraffic(*scene_, traffic::testing::Config(10, 12, 12));
+    world_ = std::make_unique<sim::World>(*scene_);
+    state_ = std::make_unique<sim::State>(world_->InitialState());
+    for (int i = 0; i < 480; ++i) world_->Step(*state_, 1.0 / 240.0);
+    context_ = CreateOsMesaContext();
+    graphics_ = std::make_unique<SceneGraphics>(*scene_);
+    graphics_->Update(*state_);
+    renderer_ = std::make_unique<Renderer>(graphics_->meshes(), kWidth, kHeight);
+  }
+  static void TearDownTestSuite() {
+    renderer_.reset();
+    graphics_.reset();
+    context_.reset();
+    state_.reset();
+    world_.reset();
+    scene_.reset();
+  }
+
+  struct Shot {
+    testing::RenderedFrame frame{kWidth, kHeight};
+    std::vector<uint32_t> unoccluded;
+  };
+
+  // Every channel of camera `index` in `conditions`.
+  static Shot Render(std::size_t index, const conditions::Conditions& conditions) {
+    return Render(index, LookOf(conditions));
+  }
+  static Shot Render(std::size_t index, const Look& look) {
+    renderer_->SetLook(look);
+    CameraView view = graphics_->CameraAt(scene_->cameras[index], *state_);
+    view.previous_world_from_camera = view.world_from_camera;
+    view.previous_world_from_camera(0, 3) -= 0.3f;  // a moving camera: flow is not zero
+    Shot shot;
+    shot.unoccluded.assign(graphics_->instance_id_bound(), 0);
+    renderer_->Render(view, graphics_->draw_items(), shot.frame.Buffers(channels::kAllPixels), shot.unoccluded);
+    return shot;
+  }
+
+  static std::unique_ptr<sim::Scene> scene_;
+  static std::unique_ptr<sim::World> world_;
+  static std::unique_ptr<sim::State> state_;
+  static std::unique_ptr<GlContext> context_;
+  static std::unique_ptr<SceneGraphics> graphics_;
+  static std::unique_ptr<Renderer> renderer_;
+};
+
+std::unique_ptr<sim::Scene> LookRenderTest::scene_;
+std::unique_ptr<sim::World> LookRenderTest::world_;
+std::unique_ptr<sim::State> LookRenderTest::state_;
+std::unique_ptr<GlContext> LookRenderTest::context_;
+std::unique_ptr<SceneGraphics> LookRenderTest::graphics_;
+std::unique_ptr<Renderer> LookRenderTest::renderer_;
+
+template <typename T>
+bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+double MeanLuma(const testing::RenderedFrame& frame) {
+  double sum = 0;
+  for (std::size_t i = 0; i < frame.rgb.size(); i += 3) {
+    sum += 0.299 * frame.rgb[i] + 0.587 * frame.rgb[i + 1] + 0.114 * frame.rgb[i + 2];
+  }
+  return sum / static_cast<double>(frame.rgb.size() / 3);
+}
+
+TEST_F(LookRenderTest, GroundTruthIsByteIdenticalInEveryPresetAndQuality) {
+  for (std::size_t camera = 0; camera < scene_->cameras.size(); ++camera) {
+    SCOPED_TRACE(scene_->cameras[camera].name);
+    const Shot reference = Render(camera, conditions::Of(Preset::CLEAR_NOON, Quality::kFast));
+    ASSERT_GT(std::count_if(reference.unoccluded.begin(), reference.unoccluded.end(), [](uint32_t n) { return n > 0; }),
+              0)
+        << "the view shows labelled objects";
+    std::vector<conditions::Conditions> all;
+    for (const conditions::PresetInfo& info : conditions::kPresets) all.push_back(conditions::Of(info.preset));
+    all.push_back({Preset::CLEAR_NOON, 7.0, Quality::kFull});
+    for (const conditions::Conditions& look : all) {
+      SCOPED_TRACE(conditions::Describe(look));
+      const Shot shot = Render(camera, look);
+      EXPECT_TRUE(SameBytes(shot.frame.depth, reference.frame.depth));
+      EXPECT_TRUE(SameBytes(shot.frame.mask, reference.frame.mask));
+      EXPECT_TRUE(SameBytes(shot.frame.semantic, reference.frame.semantic));
+      EXPECT_TRUE(SameBytes(shot.frame.normals, reference.frame.normals));
+      EXPECT_TRUE(SameBytes(shot.frame.flow, reference.frame.flow));
+      EXPECT_EQ(shot.unoccluded, reference.unoccluded);
+      EXPECT_FALSE(SameBytes(shot.frame.rgb, reference.frame.rgb)) << "the full look differs from the fast one";
+    }
+  }
+}
+
+TEST_F(LookRenderTest, EveryPresetRendersTheSameRgbEveryTime) {
+  for (const conditions::PresetInfo& info : conditions::kPresets) {
+    SCOPED_TRACE(info.name);
+    const Shot first = Render(0, conditions::Of(info.preset));
+    Render(1, conditions::Of(Preset::NIGHT));  // another view and look in between
+    const Shot again = Render(0, conditions::Of(info.preset));
+    EXPECT_TRUE(SameBytes(first.frame.rgb, again.frame.rgb));
+  }
+}
+
+TEST_F(LookRenderTest, NightIsDarkerThanDuskAndDuskThanNoonAndRainDarkensTheRoad) {
+  const std::size_t chase = 2;  // car_chase: road, sidewalks, houses and sky
+  ASSERT_EQ(scene_->cameras[chase].name, "car_chase");
+  const Shot noon = Render(chase, conditions::Of(Preset::CLEAR_NOON));
+  const Shot dusk = Render(chase, conditions::Of(Preset::DUSK));
+  const Shot night = Render(chase, conditions::Of(Preset::NIGHT));
+  EXPECT_LT(MeanLuma(night.frame), 0.6 * MeanLuma(dusk.frame));
+  EXPECT_LT(MeanLuma(dusk.frame), MeanLuma(noon.frame));
+  // The road seen from the UAV above it: wet asphalt is darker than the
+  // same asphalt dry under the same sky.
+  const auto road_luma = [](const Shot& shot) {
+    double sum = 0;
+    int count = 0;
+    for (std::size_t i = 0; i < shot.frame.semantic.size(); ++i) {
+      if (shot.frame.semantic[i] != static_cast<uint8_t>(SemanticClass::kRoad)) continue;
+      sum += shot.frame.rgb[3 * i] + shot.frame.rgb[3 * i + 1] + shot.frame.rgb[3 * i + 2];
+      ++count;
+    }
+    return count > 0 ? sum / count : -1.0;
+  };
+  Look dry_look = LookOf(conditions::Of(Preset::RAIN));
+  dry_look.wetness = 0.0f;
+  const Shot dry = Render(0, dry_look);
+  const Shot wet = Render(0, conditions::Of(Preset::RAIN));
+  ASSERT_GT(road_luma(dry), 0.0) << "the UAV sees road";
+  EXPECT_LT(road_luma(wet), 0.85 * road_luma(dry));
+}
+
+TEST_F(LookRenderTest, FogHidesTheDistance) {
+  const std::size_t front = 1;  // car_front: looks down the road to the horizon
+  const Shot clear = Render(front, conditions::Of(Preset::OVERCAST));
+  const Shot fog = Render(front, conditions::Of(Preset::FOG));
+  // Far pixels (> 80 m) come close to the fog's colour: their spread shrinks.
+  const auto far_spread = [](const Shot& shot) {
+    double sum = 0, sum2 = 0;
+    int count = 0;
+    for (std::size_t i = 0; i < shot.frame.depth.size(); ++i) {
+      if (!(shot.frame.depth[i] > 80.0f && std::isfinite(shot.frame.depth[i]))) continue;
+      const double g = shot.frame.rgb[3 * i + 1];
+      sum += g;
+      sum2 += g * g;
+      ++count;
+    }
+    const double mean = sum / count;
+    return count > 50 ? std::sqrt(sum2 / count - mean * mean) : -1.0;
+  };
+  ASSERT_GT(far_spread(clear), 0.0) << "the view reaches past 80 m";
+  EXPECT_LT(far_spread(fog), 0.5 * far_spread(clear));
+}
+
+}  // namespace
+}  // namespace sim4cv::render

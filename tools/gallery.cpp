@@ -1,0 +1,95 @@
+// Renders the gallery (docs/gallery.md): the same views of one moment of a
+// map with traffic, in the flat look of --quality fast and in every
+// conditions preset, as PNGs. In-process (no daemon): a frame is a pure
+// function of the world state, the camera and the conditions.
+//   sim4cv_gallery --out DIR [--map FILE] [--width W] [--height H] [--steps N]
+#include <cstdio>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
+
+#include "protocol/conditions.h"
+#include "server/render/gl_context.h"
+#include "server/render/renderer.h"
+#include "server/render/scene_graphics.h"
+#include "server/sim/world.h"
+
+namespace {
+
+using namespace sim4cv;
+
+cv::Mat Save(const std::filesystem::path& path, const std::vector<uint8_t>& rgb, uint32_t width, uint32_t height) {
+  cv::Mat image(static_cast<int>(height), static_cast<int>(width), CV_8UC3, const_cast<uint8_t*>(rgb.data()));
+  cv::Mat bgr;
+  cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
+  if (!cv::imwrite(path.string(), bgr)) throw std::runtime_error("cannot write " + path.string());
+  return bgr;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  uint32_t width = 480, height = 270;
+  int steps = 2400;
+  std::string map_file = "scenes/driving/train/01_urban.map";
+  std::filesystem::path out;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (flag == "--out") out = argv[i + 1];
+    else if (flag == "--map") map_file = argv[i + 1];
+    else if (flag == "--width") width = static_cast<uint32_t>(std::stoi(argv[i + 1]));
+    else if (flag == "--height") height = static_cast<uint32_t>(std::stoi(argv[i + 1]));
+    else if (flag == "--steps") steps = std::stoi(argv[i + 1]);
+    else throw std::runtime_error("unknown flag " + flag);
+  }
+  if (out.empty()) throw std::runtime_error("usage: sim4cv_gallery --out DIR [--map FILE] [--width W] [--height H]");
+  std::filesystem::create_directories(out);
+
+  sim::Scene scene = sim::SceneFromMap(map_file, "", 8.0f, width, height);
+  traffic::TrafficConfig traffic;
+  traffic.moving_cars = 12;
+  traffic.parked_cars = 20;
+  traffic.pedestrians = 16;
+  sim::AddTraffic(scene, traffic);
+  sim::World world(scene);
+  sim::State state = world.InitialState();
+  for (int i = 0; i < steps; ++i) world.Step(state, 1.0 / 240.0);
+
+  auto gl = render::CreateOsMesaContext();
+  gl->MakeCurrent();
+  render::SceneGraphics graphics(scene);
+  graphics.Update(state);
+  render::Renderer renderer(graphics.meshes(), width, height);
+  std::vector<uint8_t> rgb(std::size_t{width} * height * 3);
+  render::FrameBuffers buffers{};
+  buffers[*channels::IndexOf(proto::CHANNEL_RGB)] = rgb.data();
+
+  std::vector<cv::Mat> rows;  // one per look, the views side by side: sheet.png
+  const auto render_all = [&](const std::string& look_name, const render::Look& look) {
+    renderer.SetLook(look);
+    std::vector<cv::Mat> row;
+    for (const sim::CameraSpec& camera : scene.cameras) {
+      render::CameraView view = graphics.CameraAt(camera, state);
+      view.previous_world_from_camera = view.world_from_camera;
+      renderer.Render(view, graphics.draw_items(), buffers, {});
+      const auto path = out / (camera.name + "_" + look_name + ".png");
+      row.push_back(Save(path, rgb, width, height));
+      std::printf("%s\n", path.c_str());
+    }
+    rows.emplace_back();
+    cv::hconcat(row, rows.back());
+  };
+  render_all("fast", render::LookOf(conditions::Of(conditions::Preset::CLEAR_NOON, conditions::Quality::kFast)));
+  for (const conditions::PresetInfo& preset : conditions::kPresets) {
+    render_all(std::string(preset.name), render::LookOf(conditions::Of(preset.preset)));
+  }
+  cv::Mat sheet;
+  cv::vconcat(rows, sheet);
+  cv::imwrite((out / "sheet.png").string(), sheet);
+  return 0;
+} catch (const std::exception& error) {
+  std::fprintf(stderr, "sim4cv_gallery: %s\n", error.what());
+  return 2;
+}
