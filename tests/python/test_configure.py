@@ -155,3 +155,22 @@ def test_load_map_with_traffic(connect):
     assert pb.OBJECT_CLASS_TRAFFIC_LIGHT in classes, classes
     refused(lambda: client.load_map_by_name("driving/train/01_urban", traffic={"cars": 999}),
             pb.ERROR_CODE_INVALID_ARGUMENT, "LoadMap.traffic.cars is 999")
+
+
+def test_conditions_change_rgb_only_and_bad_ones_are_refused(connect):
+    client = connect("conditions")
+    assert client.get_world().conditions.preset == "clear_noon"
+    client.subscribe("uav", ["rgb", "depth", "mask"], "lockstep")
+    noon = client.step_and_receive()
+    night_world = client.set_conditions("night")
+    assert (night_world.conditions.preset, night_world.conditions.quality) == ("night", "full")
+    client.reset()
+    night = client.step_and_receive()
+    assert night.frame_id == noon.frame_id
+    assert image_array(night, "depth").tobytes() == image_array(noon, "depth").tobytes()
+    assert image_array(night, "mask").tobytes() == image_array(noon, "mask").tobytes()
+    assert image_array(night, "rgb").mean() < 0.6 * image_array(noon, "rgb").mean()
+    assert client.set_conditions(hour=6.5).conditions.hour == 6.5
+    refused(lambda: client.set_conditions("sandstorm"), pb.ERROR_CODE_INVALID_ARGUMENT,
+            "SetConditions.preset 'sandstorm' is not a preset", "clear_morning")
+    refused(lambda: client.set_conditions(hour=-1), pb.ERROR_CODE_INVALID_ARGUMENT, "SetConditions.hour is -1")

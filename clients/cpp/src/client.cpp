@@ -211,6 +211,11 @@ proto::WorldInfo Client::Reset() { return ConfigureWorld(detail::ResetRequest())
 
 proto::WorldInfo Client::GetWorld() { return ConfigureWorld(detail::GetWorldRequest()); }
 
+proto::WorldInfo Client::SetConditions(const std::string& preset, std::optional<double> hour,
+                                       const std::string& quality) {
+  return ConfigureWorld(detail::SetConditionsRequest(preset, hour, quality));
+}
+
 proto::RoadQueryResult Client::QueryRoad(double x, double y, uint32_t count, double step,
                                          std::optional<double> heading_deg) {
   return std::move(*Configure(detail::QueryRoadRequest(x, y, count, step, heading_deg)).mutable_road());

@@ -194,6 +194,16 @@ proto::Configure ResetRequest() {
   return request;
 }
 
+proto::Configure SetConditionsRequest(const std::string& preset, std::optional<double> hour,
+                                      const std::string& quality) {
+  proto::Configure request;
+  proto::SetConditions& conditions = *request.mutable_set_conditions();
+  conditions.set_preset(preset);
+  if (hour) conditions.set_hour(*hour);
+  conditions.set_quality(quality);
+  return request;
+}
+
 proto::Configure GetWorldRequest() {
   proto::Configure request;
   request.mutable_get_world();

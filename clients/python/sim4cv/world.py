@@ -61,6 +61,18 @@ class WorldRequests:
         waypoints = pb.Waypoints(points=[pb.Vec2(x=x, y=y) for x, y in points], closed=closed)
         return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, waypoints=waypoints, speed=speed))
 
+    def set_conditions(self, preset="", hour=None, quality=""):
+        """Weather and time of day of the RGB images from the next frame on:
+        preset "clear_noon", "clear_morning", "overcast", "fog", "dusk",
+        "night" or "rain" ("": keep), hour in [0, 24] (None: the preset's
+        own), quality "full" or "fast" ("": keep). Depth, masks, boxes and
+        the other channels never change with them. Returns the WorldInfo,
+        whose .conditions says what is in force."""
+        request = pb.SetConditions(preset=preset, quality=quality)
+        if hour is not None:
+            request.hour = hour
+        return self._configure_world(set_conditions=request)
+
     def set_speed(self, entity_id, speed):
         """Keeps the car's route and changes its speed; 0 stops it."""
         return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, keep_route=True, speed=speed))

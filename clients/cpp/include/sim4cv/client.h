@@ -163,6 +163,12 @@ class Client {
   // Back to the loaded map's start: time 0, spawned entities and added cameras gone.
   proto::WorldInfo Reset();
   proto::WorldInfo GetWorld();
+  // Weather and time of day of the RGB images from the next frame on:
+  // preset "clear_noon", "clear_morning", "overcast", "fog", "dusk", "night"
+  // or "rain" ("": keep), hour in [0, 24] (unset: the preset's), quality
+  // "full" or "fast" ("": keep). Other channels never change with them.
+  proto::WorldInfo SetConditions(const std::string& preset, std::optional<double> hour = std::nullopt,
+                                 const std::string& quality = "");
   // Map scenes only: the nearest lane point to (x, y) (only lanes within 90
   // degrees of `heading_deg` if given), and `count` points every `step`
   // metres ahead of it.
