@@ -221,27 +221,55 @@ Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f&
   return Labelled(std::move(mesh), SemanticClass::kCar);
 }
 
-Mesh MakeUavMesh(float span, const Eigen::Vector3f& color) {
+UavParts MakeUavParts(float span, const Eigen::Vector3f& color) {
   SIM4CV_THROW_UNLESS(span > 0.0f, "UAV span " << span << " must be > 0");
-  const Eigen::Vector3f rotor_color(0.15f, 0.15f, 0.15f);
+  const Eigen::Vector3f motor_color(0.1f, 0.1f, 0.1f), blade_color(0.2f, 0.2f, 0.22f);
   const float arm_thickness = 0.04f * span;
   const Mesh arm = MakeBox({0.5f * span, 0.5f * arm_thickness, 0.5f * arm_thickness}, color);
-  Mesh mesh;
-  AppendBox(mesh, Eigen::Vector3f::Zero(), Eigen::Vector3f(0.12f, 0.12f, 0.05f) * span, color);
+  UavParts parts;
+  AppendBox(parts.body, Eigen::Vector3f::Zero(), Eigen::Vector3f(0.12f, 0.12f, 0.05f) * span, color);
   for (float yaw_deg : {45.0f, -45.0f}) {
     Eigen::Matrix4f transform = Eigen::Matrix4f::Identity();
     transform.topLeftCorner<3, 3>() = Eigen::AngleAxisf(yaw_deg * std::numbers::pi_v<float> / 180.0f, Eigen::Vector3f::UnitZ())
                                           .toRotationMatrix();
-    AppendMesh(mesh, arm, transform);
+    AppendMesh(parts.body, arm, transform);
   }
+  const Eigen::Vector3f motor_half(0.03f * span, 0.03f * span, 0.02f * span);
+  for (const Eigen::Vector3f& hub : RotorHubs(span)) {
+    AppendBox(parts.body, hub - Eigen::Vector3f(0, 0, motor_half.z()), motor_half, motor_color);  // on the arm tip
+  }
+  // Two blades crossing at the hub, 0.12 span long each way: any turn stays
+  // inside the span.
+  const float blade = 0.12f * span;
+  AppendBox(parts.rotor, {0.0f, 0.0f, 0.005f * span}, {blade, 0.015f * span, 0.005f * span}, blade_color);
+  AppendBox(parts.rotor, {0.0f, 0.0f, 0.005f * span}, {0.015f * span, blade, 0.0049f * span}, blade_color);
+  parts.body = Labelled(std::move(parts.body), SemanticClass::kUav);
+  parts.rotor = Labelled(std::move(parts.rotor), SemanticClass::kUav);
+  return parts;
+}
+
+std::array<Eigen::Vector3f, 4> RotorHubs(float span) {
   const float tip = 0.5f * span / std::sqrt(2.0f);
-  const Eigen::Vector3f rotor_half(0.12f * span, 0.12f * span, 0.01f * span);
-  for (float x : {-tip, tip}) {
-    for (float y : {-tip, tip}) {
-      AppendBox(mesh, {x, y, 0.5f * arm_thickness + rotor_half.z()}, rotor_half, rotor_color);  // resting on the arm
-    }
-  }
-  return Labelled(std::move(mesh), SemanticClass::kUav);
+  const float top = 0.02f * span + 0.04f * span;  // arm top plus the motor's height
+  return {Eigen::Vector3f(tip, tip, top), Eigen::Vector3f(-tip, -tip, top), Eigen::Vector3f(tip, -tip, top),
+          Eigen::Vector3f(-tip, tip, top)};
+}
+
+Eigen::Matrix4f RotorPose(float span, std::size_t rotor, double sim_time) {
+  // About 25 revolutions a second, diagonal pairs turning opposite ways as on a real quadrotor.
+  const double turns = 25.0 * sim_time;
+  const double angle = 2.0 * std::numbers::pi * (turns - std::floor(turns)) * (rotor < 2 ? 1.0 : -1.0);
+  Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();
+  pose.topLeftCorner<3, 3>() = Eigen::AngleAxisf(static_cast<float>(angle), Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  pose.block<3, 1>(0, 3) = RotorHubs(span)[rotor];
+  return pose;
+}
+
+Mesh MakeUavMesh(float span, const Eigen::Vector3f& color) {
+  const UavParts parts = MakeUavParts(span, color);
+  Mesh mesh = parts.body;
+  for (std::size_t rotor = 0; rotor < 4; ++rotor) AppendMesh(mesh, parts.rotor, RotorPose(span, rotor, 0.0));
+  return mesh;
 }
 
 void AppendMesh(Mesh& into, const Mesh& part, const Eigen::Matrix4f& transform) {

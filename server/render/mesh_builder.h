@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "server/render/render_types.h"
@@ -35,8 +36,19 @@ inline constexpr int kCarStyleCount = 6;
 Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f& color,
                  CarStyle style = CarStyle::kHatchback);
 
-// A quadrotor: a hub, two crossed arms of length `span` along the diagonals
-// and four flat rotor blocks at the arm tips, centred at the origin. 84 triangles.
+// A quadrotor of `span` (tip to tip along its diagonals), centred at the
+// origin: the body (hub, two crossed arms, four motors) and one two-bladed
+// rotor, whose origin is its hub. Each rotor turns inside the span.
+struct UavParts {
+  Mesh body, rotor;
+};
+UavParts MakeUavParts(float span, const Eigen::Vector3f& color);
+// Where the four rotors' hubs are on the body.
+std::array<Eigen::Vector3f, 4> RotorHubs(float span);
+// The body-frame pose of rotor 0..3 at `sim_time` seconds: spinning about
+// its hub, diagonal pairs in opposite directions.
+Eigen::Matrix4f RotorPose(float span, std::size_t rotor, double sim_time);
+// Body and rotors at rest in one mesh.
 Mesh MakeUavMesh(float span, const Eigen::Vector3f& color);
 
 // Appends `part` moved by `transform` (normals follow its inverse transpose;

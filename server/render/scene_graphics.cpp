@@ -91,10 +91,18 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   target_car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.15f, 0.30f, 0.75f}));
   car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
-  meshes_.push_back(MakeUavMesh(2.0f * static_cast<float>(scene.uav.params.half_extents.x()), {0.15f, 0.15f, 0.18f}));
-  uav_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
-  meshes_.push_back(MakePedestrianMesh(0));
-  pedestrian_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
+  const auto add_mesh = [&](Mesh mesh) {
+    meshes_.push_back(std::move(mesh));
+    return static_cast<MeshId>(meshes_.size() - 1);
+  };
+  uav_span_ = 2.0f * static_cast<float>(scene.uav.params.half_extents.x());
+  UavParts uav = MakeUavParts(uav_span_, {0.15f, 0.15f, 0.18f});
+  uav_mesh_ = add_mesh(std::move(uav.body));
+  rotor_mesh_ = add_mesh(std::move(uav.rotor));
+  PedestrianParts walker = MakePedestrianParts(0);
+  pedestrian_mesh_ = add_mesh(std::move(walker.body));
+  leg_mesh_ = add_mesh(std::move(walker.leg));
+  arm_mesh_ = add_mesh(std::move(walker.arm));
   // Entities take the ids below the static objects' (sim::kMaxEntityId).
   instance_id_bound_ = sim::kMaxEntityId + 1;
   for (const auto& object : static_labelled_)
@@ -129,7 +137,20 @@ void SceneGraphics::Update(const sim::State& state) {
         box_centre.z() += kPedestrianBox.z();
         break;
     }
-    items_.push_back({mesh, BodyPose(entity.body), instance});
+    const Eigen::Matrix4f pose = BodyPose(entity.body);
+    items_.push_back({mesh, pose, instance});
+    // Moving parts: a UAV's rotors, a pedestrian's limbs (same instance).
+    if (entity.kind == sim::EntityKind::kUav) {
+      for (std::size_t rotor = 0; rotor < 4; ++rotor) {
+        items_.push_back({rotor_mesh_, pose * RotorPose(uav_span_, rotor, state.sim_time), instance});
+      }
+    } else if (entity.kind == sim::EntityKind::kPedestrian) {
+      const auto limbs = LimbPoses(GaitPhase(entity.body.position.head<2>(), entity.body.Yaw()),
+                                   LimbSwing(entity.body.linear_velocity.norm()));
+      for (std::size_t limb = 0; limb < limbs.size(); ++limb) {
+        items_.push_back({limb < 2 ? leg_mesh_ : arm_mesh_, pose * limbs[limb], instance});
+      }
+    }
     labelled_.push_back({instance, object_class, 0});
     moving_.push_back({instance, object_class, box_centre, entity.body.orientation, entity.body.linear_velocity,
                        entity.body.angular_velocity, half_extents});

@@ -30,7 +30,10 @@ TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const traffic
     car_meshes_[i] = add_mesh(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), TrafficCarColour(i),
                                           static_cast<CarStyle>(i % kCarStyleCount)));
   }
-  for (int i = 0; i < kWalkerLooks; ++i) walker_meshes_[i] = add_mesh(MakePedestrianMesh(static_cast<uint32_t>(i)));
+  for (int i = 0; i < kWalkerLooks; ++i) {
+    PedestrianParts parts = MakePedestrianParts(static_cast<uint32_t>(i));
+    walker_meshes_[i] = {add_mesh(std::move(parts.body)), add_mesh(std::move(parts.leg)), add_mesh(std::move(parts.arm))};
+  }
   for (const traffic::Signal signal : {traffic::Signal::kGreen, traffic::Signal::kYellow, traffic::Signal::kRed}) {
     lamp_meshes_[static_cast<std::size_t>(signal)] = add_mesh(MakeLampMesh(signal));
   }
@@ -84,9 +87,17 @@ void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time
   }
   for (std::size_t i = 0; i < state.walkers.size(); ++i) {
     const traffic::Walker& walker = state.walkers[i];
-    // The walker's mesh stands on its origin; its box is centred half its height up.
-    add(walker_meshes_[i % kWalkerLooks], first_walker_ + static_cast<InstanceId>(i), proto::OBJECT_CLASS_PEDESTRIAN,
-        walker.position, walker.heading, 0.0, kPedestrianBox.z(), kPedestrianBox, walker.linear_velocity, 0.0);
+    // The walker's body stands on its origin; its box is centred half its height up.
+    const WalkerMeshes& look = walker_meshes_[i % kWalkerLooks];
+    const auto id = static_cast<InstanceId>(first_walker_ + i);
+    add(look.body, id, proto::OBJECT_CLASS_PEDESTRIAN, walker.position, walker.heading, 0.0, kPedestrianBox.z(),
+        kPedestrianBox, walker.linear_velocity, 0.0);
+    const Eigen::Matrix4f body = items.back().world_from_model;
+    const std::array<Eigen::Matrix4f, 4> limbs =
+        LimbPoses(GaitPhase(walker.position.head<2>(), walker.heading), LimbSwing(walker.linear_velocity.norm()));
+    for (std::size_t limb = 0; limb < limbs.size(); ++limb) {
+      items.push_back({limb < 2 ? look.leg : look.arm, body * limbs[limb], id});
+    }
   }
 }
 

@@ -1,6 +1,7 @@
 // What the renderer draws of a map's traffic (server/sim/traffic): parked
 // cars and traffic lights as static labelled objects, and per frame the lit
-// lamp of every light, the moving cars and the walkers. Ids follow the map's
+// lamp of every light, the moving cars and the walkers (a body and four
+// limbs swinging with their gait, five draw items of one instance). Ids follow the map's
 // own objects: parked cars, then lights, then moving cars, then walkers.
 #pragma once
 
@@ -50,7 +51,10 @@ class TrafficGraphics {
   std::vector<InstanceId> light_ids_;
   std::array<MeshId, 3> lamp_meshes_{};  // by traffic::Signal
   std::array<MeshId, kCarVariants> car_meshes_{};
-  std::array<MeshId, kWalkerLooks> walker_meshes_{};
+  struct WalkerMeshes {
+    MeshId body = 0, leg = 0, arm = 0;
+  };
+  std::array<WalkerMeshes, kWalkerLooks> walker_meshes_{};
   InstanceId first_moving_car_ = 0, first_walker_ = 0, id_bound_ = 0;
 };
 

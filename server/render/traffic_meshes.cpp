@@ -1,7 +1,10 @@
 #include "server/render/traffic_meshes.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <numbers>
 
 #include "protocol/semantic_classes.h"
 #include "server/render/map_mesh_util.h"
@@ -58,7 +61,7 @@ Vector3f DarkColour(Signal signal) { return LitColour(signal) * 0.18f; }
 
 }  // namespace
 
-Mesh MakePedestrianMesh(uint32_t variant) {
+PedestrianParts MakePedestrianParts(uint32_t variant) {
   static const std::array<Vector3f, 8> kShirts = {Vector3f(0.70f, 0.12f, 0.10f), Vector3f(0.12f, 0.25f, 0.55f),
                                                   Vector3f(0.85f, 0.85f, 0.80f), Vector3f(0.15f, 0.40f, 0.20f),
                                                   Vector3f(0.85f, 0.65f, 0.15f), Vector3f(0.30f, 0.30f, 0.32f),
@@ -76,17 +79,45 @@ Mesh MakePedestrianMesh(uint32_t variant) {
   const Vector3f& skin = Pick(kSkins, variant, 13);
   const Vector3f& hair = Pick(kHair, variant, 14);
   // Heights from the ground up; parts that meet overlap a little, so no
-  // faces share a plane (z-fighting) and no gaps show.
-  Mesh mesh;
-  for (float side : {-1.0f, 1.0f}) {
-    AddBox(mesh, {0.04f, side * 0.1f, 0.04f}, {0.13f, 0.055f, 0.04f}, shoes);    // toes forward: shows the facing
-    AddBox(mesh, {0.0f, side * 0.1f, 0.48f}, {0.075f, 0.07f, 0.41f}, trousers);  // 0.07 .. 0.89 m
-    AddBox(mesh, {0.0f, side * 0.265f, 1.13f}, {0.055f, 0.055f, 0.31f}, shirt);  // arms, 0.82 .. 1.44 m
-  }
-  AddBox(mesh, {0.0f, 0.0f, 1.15f}, {0.12f, 0.2f, 0.29f}, shirt);        // torso, 0.86 .. 1.44 m
-  AddBox(mesh, {0.0f, 0.0f, 1.55f}, {0.1f, 0.085f, 0.12f}, skin);        // head (and neck), 1.43 .. 1.67 m
-  AddBox(mesh, {-0.005f, 0.0f, 1.705f}, {0.105f, 0.09f, 0.045f}, hair);  // 1.66 .. kPedestrianHeight
-  return Labelled(std::move(mesh), SemanticClass::kPerson);
+  // faces share a plane (z-fighting) and no gaps show. Limbs hang from
+  // their joint (kHip*, kArmPivot*), the origin of their mesh.
+  PedestrianParts parts;
+  AddBox(parts.leg, {0.04f, 0.0f, 0.04f - kHipHeight}, {0.13f, 0.055f, 0.04f}, shoes);  // toes forward: the facing
+  AddBox(parts.leg, {0.0f, 0.0f, 0.48f - kHipHeight}, {0.075f, 0.07f, 0.41f}, trousers);  // 0.07 .. 0.89 m
+  AddBox(parts.arm, {0.0f, 0.0f, -0.31f}, {0.055f, 0.055f, 0.31f}, shirt);               // 0.82 .. 1.44 m
+  AddBox(parts.body, {0.0f, 0.0f, 1.15f}, {0.12f, 0.2f, 0.29f}, shirt);                  // torso, 0.86 .. 1.44 m
+  AddBox(parts.body, {0.0f, 0.0f, 1.55f}, {0.1f, 0.085f, 0.12f}, skin);  // head (and neck), 1.43 .. 1.67 m
+  AddBox(parts.body, {-0.005f, 0.0f, 1.705f}, {0.105f, 0.09f, 0.045f}, hair);  // 1.66 .. kPedestrianHeight
+  for (Mesh* part : {&parts.body, &parts.leg, &parts.arm}) *part = Labelled(std::move(*part), SemanticClass::kPerson);
+  return parts;
+}
+
+std::array<Eigen::Matrix4f, 4> LimbPoses(double phase, double swing) {
+  // Legs swing opposite each other, each arm opposite its own side's leg.
+  const auto swing_about_y = [](float angle, float y, float height) {
+    Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();
+    pose.topLeftCorner<3, 3>() = Eigen::AngleAxisf(angle, Vector3f::UnitY()).toRotationMatrix();
+    pose.block<3, 1>(0, 3) = Vector3f(0.0f, y, height);
+    return pose;
+  };
+  const auto angle = static_cast<float>(std::min(swing, kMaxLimbSwing) * std::sin(phase));
+  return {swing_about_y(angle, kHipY, kHipHeight), swing_about_y(-angle, -kHipY, kHipHeight),
+          swing_about_y(-angle, kArmPivotY, kArmPivotHeight), swing_about_y(angle, -kArmPivotY, kArmPivotHeight)};
+}
+
+double GaitPhase(const Eigen::Vector2d& position, double heading) {
+  const double along = position.x() * std::cos(heading) + position.y() * std::sin(heading);
+  return 2.0 * std::numbers::pi * along / kStrideM;
+}
+
+double LimbSwing(double speed) { return kMaxLimbSwing * std::clamp(speed / 1.4, 0.0, 1.0); }
+
+Mesh MakePedestrianMesh(uint32_t variant) {
+  const PedestrianParts parts = MakePedestrianParts(variant);
+  Mesh mesh = parts.body;
+  const std::array<Eigen::Matrix4f, 4> limbs = LimbPoses(0.0, 0.0);
+  for (std::size_t i = 0; i < limbs.size(); ++i) AppendMesh(mesh, i < 2 ? parts.leg : parts.arm, limbs[i]);
+  return mesh;
 }
 
 Mesh MakeTrafficLightMesh() {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -16,16 +17,40 @@ namespace sim4cv::render {
 
 // How tall a walker is, m.
 inline constexpr float kPedestrianHeight = 1.75f;
-// Half extents of the 3D box a walker's ground truth gives: front to back, shoulder to
-// shoulder, head to toe.
-inline const Eigen::Vector3d kPedestrianBox(0.25, 0.3, kPedestrianHeight / 2.0);
+// Half extents of the 3D box a walker's ground truth gives: front to back
+// (room for a full stride, kMaxLimbSwing), shoulder to shoulder, head to toe.
+inline const Eigen::Vector3d kPedestrianBox(0.5, 0.33, kPedestrianHeight / 2.0);
+// Where a walker's limbs hang from, m: hips and shoulders (arm pivots), either side of x.
+inline constexpr float kHipHeight = 0.89f, kHipY = 0.1f, kArmPivotHeight = 1.44f, kArmPivotY = 0.265f;
+// A full gait cycle (two steps) covers this much ground, m.
+inline constexpr double kStrideM = 1.4;
+// The largest swing of a leg or an arm about its joint, radians (22 degrees).
+inline constexpr double kMaxLimbSwing = 0.38;
 // The traffic light's housing: its top, m above the pole's foot.
 inline constexpr float kTrafficLightHeight = 3.1f;
 
-// A walker, kPedestrianHeight tall, standing: shoes, legs, torso, arms, head
-// and hair, all boxes. Origin on the ground between its feet, facing +x.
-// `variant` picks the clothes, skin and hair; the same variant always gives
-// the same mesh. 108 triangles.
+// A walker's parts: the body (torso, head, hair) with its origin on the
+// ground between the feet, facing +x; a leg (with its shoe) and an arm, each
+// with its origin at the joint it hangs from. `variant` picks the clothes,
+// skin and hair; the same variant always gives the same meshes.
+struct PedestrianParts {
+  Mesh body, leg, arm;
+};
+PedestrianParts MakePedestrianParts(uint32_t variant);
+
+// The body-frame poses of the left leg, right leg, left arm and right arm
+// (meshes PedestrianParts::leg, leg, arm, arm) at gait `phase` (radians) with
+// limbs swinging up to `swing` radians (at most kMaxLimbSwing): the limbs stay
+// inside kPedestrianBox whatever the phase.
+std::array<Eigen::Matrix4f, 4> LimbPoses(double phase, double swing);
+// The gait phase of a walker at `position` facing `heading` (radians from
+// +x): one cycle per kStrideM along the heading. A function of the pose
+// alone, so a replayed run (which logs poses) swings the same limbs.
+double GaitPhase(const Eigen::Vector2d& position, double heading);
+// How far the limbs swing at `speed` m/s: none standing, full at 1.4 m/s and up.
+double LimbSwing(double speed);
+
+// A walker standing, in one mesh: body and limbs at rest. 108 triangles.
 Mesh MakePedestrianMesh(uint32_t variant);
 
 // A traffic light: a pole and, near its top, a housing with three dark lamps

@@ -122,6 +122,25 @@ TEST(MeshBuilder, UavIsCentredAndWithinItsSpan) {
   EXPECT_LT(Bounds(uav).center().head<2>().norm(), 1e-4f);
 }
 
+TEST(MeshBuilder, RotorsSpinInsideTheSpan) {
+  const float span = 0.5f;
+  const UavParts parts = MakeUavParts(span, {0.2f, 0.2f, 0.2f});
+  ExpectWellFormed(parts.rotor, 100);
+  for (std::size_t rotor = 0; rotor < 4; ++rotor) {
+    for (double t = 0.0; t < 0.05; t += 0.0013) {
+      for (const Vertex& v : parts.rotor.vertices) {
+        const Eigen::Vector4f p = RotorPose(span, rotor, t) * Eigen::Vector4f(v.position[0], v.position[1], v.position[2], 1);
+        ASSERT_LT(p.head<2>().cwiseAbs().maxCoeff(), 0.5f * span) << "rotor " << rotor << " at " << t << " s";
+      }
+    }
+    EXPECT_FALSE(RotorPose(span, rotor, 0.0).isApprox(RotorPose(span, rotor, 0.01))) << "it turns";
+    EXPECT_TRUE((RotorPose(span, rotor, 0.0).block<3, 1>(0, 3).isApprox(RotorHubs(span)[rotor])));
+  }
+  // Diagonal pairs turn opposite ways.
+  const Eigen::Matrix3f a = RotorPose(span, 0, 0.002).topLeftCorner<3, 3>(), b = RotorPose(span, 2, 0.002).topLeftCorner<3, 3>();
+  EXPECT_TRUE(a.isApprox(b.transpose(), 1e-5f));
+}
+
 TEST(MeshBuilder, AppendMeshTransformsAndRebasesIndices) {
   Mesh scene = MakeBox({1, 1, 1}, {1, 1, 1});
   Eigen::Matrix4f transform = Eigen::Matrix4f::Identity();

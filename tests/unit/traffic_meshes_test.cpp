@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <set>
 #include <vector>
 
@@ -141,6 +142,36 @@ TEST(TrafficMeshesTest, CrosswalkMarkingsAreFlatStripesAcrossBothLanesFacingUp) 
     EXPECT_LE(std::abs(across), 4.0f) << "within the road's two lanes";
     EXPECT_LE(std::abs(along), 1.5f + 1e-5f);
   }
+}
+
+TEST(TrafficMeshesTest, WalkingLimbsSwingWithTheGaitAndStayInsideTheBox) {
+  const PedestrianParts parts = MakePedestrianParts(3);
+  float front = 0.0f;
+  for (int step = 0; step < 64; ++step) {
+    const double phase = 2.0 * std::numbers::pi * step / 64.0;
+    const auto limbs = LimbPoses(phase, kMaxLimbSwing);
+    for (std::size_t limb = 0; limb < limbs.size(); ++limb) {
+      for (const Vertex& v : (limb < 2 ? parts.leg : parts.arm).vertices) {
+        const Eigen::Vector4f p = limbs[limb] * Eigen::Vector4f(v.position[0], v.position[1], v.position[2], 1.0f);
+        ASSERT_LE(std::abs(p.x()), kPedestrianBox.x() + 1e-5) << "phase " << phase << ", limb " << limb;
+        ASSERT_LE(std::abs(p.y()), kPedestrianBox.y() + 1e-5);
+        ASSERT_GE(p.z(), -0.05f) << "a swinging foot may not sink into the ground";
+        ASSERT_LE(p.z(), kPedestrianHeight);
+        if (limb == 0) front = std::max(front, p.x());
+      }
+    }
+  }
+  EXPECT_GT(front, 0.4f) << "a full stride reaches forward";
+  // Standing: the limbs hang straight, as in the one-piece mesh.
+  for (const Eigen::Matrix4f& pose : LimbPoses(1.0, LimbSwing(0.0))) {
+    EXPECT_TRUE((pose.topLeftCorner<3, 3>().isIdentity(1e-6f)));
+  }
+  // One gait cycle per stride along the heading, whatever the heading.
+  const double heading = 0.7;
+  const Eigen::Vector2d start(3, -4), ahead = start + kStrideM * Eigen::Vector2d(std::cos(heading), std::sin(heading));
+  EXPECT_NEAR(GaitPhase(ahead, heading) - GaitPhase(start, heading), 2.0 * std::numbers::pi, 1e-9);
+  EXPECT_GT(LimbSwing(1.4), LimbSwing(0.5));
+  EXPECT_EQ(LimbSwing(5.0), kMaxLimbSwing);
 }
 
 TEST(TrafficMeshesTest, TrafficCarColoursDifferFromNeighboursAndFromTheSimulatedVehicles) {
