@@ -4,6 +4,8 @@
 #pragma once
 
 #include <array>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -69,6 +71,8 @@ struct Conditions {
   Preset preset = Preset::CLEAR_NOON;
   double hour = Info(Preset::CLEAR_NOON).hour;
   Quality quality = Quality::kFull;
+  double exposure = 1.0;   // multiplies the preset's exposure
+  uint32_t variation = 0;  // 0: every surface its own colour; else the seed of a colour jitter per object
 };
 
 // The preset at its own hour.
@@ -84,12 +88,48 @@ inline std::optional<Quality> FindQuality(std::string_view name) {
   return std::nullopt;
 }
 
-// "rain at 15.00 h, full quality": for logs and run-log headers.
+// "rain at 15.00 h, full quality" (plus ", exposure 1.20, variation 77"
+// when set): for logs and run-log headers.
 inline std::string Describe(const Conditions& conditions) {
-  char hour[16];
-  std::snprintf(hour, sizeof hour, "%.2f", conditions.hour);
-  return std::string(Info(conditions.preset).name) + " at " + hour + " h, " +
-         std::string(QualityName(conditions.quality)) + " quality";
+  char text[64];
+  std::snprintf(text, sizeof text, " at %.2f h, ", conditions.hour);
+  std::string description = std::string(Info(conditions.preset).name) + text +
+                            std::string(QualityName(conditions.quality)) + " quality";
+  if (conditions.exposure != 1.0 || conditions.variation != 0) {
+    std::snprintf(text, sizeof text, ", exposure %.2f, variation %u", conditions.exposure, conditions.variation);
+    description += text;
+  }
+  return description;
+}
+
+// Domain randomisation: draw number `draw` of the sequence `seed` gives
+// (the same conditions for the same seed and draw, on any machine): a
+// preset, an hour that suits it, an exposure in [0.7, 1.4] and a colour
+// variation seed.
+inline Conditions Randomized(uint64_t seed, uint64_t draw, Quality quality) {
+  uint64_t state = seed ^ (draw * 0x9E3779B97F4A7C15ull);
+  const auto next = [&state] {  // splitmix64
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  };
+  const auto uniform = [&next](double low, double high) {
+    return low + (high - low) * static_cast<double>(next() >> 11) * 0x1.0p-53;
+  };
+  Conditions conditions;
+  conditions.quality = quality;
+  conditions.preset = kPresets[next() % kPresets.size()].preset;
+  switch (conditions.preset) {
+    case Preset::CLEAR_MORNING: conditions.hour = next() % 2 ? uniform(6.8, 9.0) : uniform(15.0, 17.0); break;
+    case Preset::DUSK: conditions.hour = uniform(17.3, 17.9); break;  // the sun sets (look.h) at about 17.93
+    case Preset::NIGHT: conditions.hour = std::fmod(uniform(20.0, 28.5), 24.0); break;
+    case Preset::FOG: conditions.hour = uniform(7.0, 12.0); break;
+    default: conditions.hour = uniform(9.0, 16.0); break;
+  }
+  conditions.exposure = uniform(0.7, 1.4);
+  conditions.variation = static_cast<uint32_t>(next() | 1u);
+  return conditions;
 }
 
 }  // namespace sim4cv::conditions

@@ -3,6 +3,7 @@
 // conditions preset, as PNGs. In-process (no daemon): a frame is a pure
 // function of the world state, the camera and the conditions.
 //   sim4cv_gallery --out DIR [--map FILE] [--width W] [--height H] [--steps N]
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "protocol/conditions.h"
+#include "server/render/camera_math.h"
 #include "server/render/gl_context.h"
 #include "server/render/renderer.h"
 #include "server/render/scene_graphics.h"
@@ -66,15 +68,28 @@ int main(int argc, char** argv) try {
   render::FrameBuffers buffers{};
   buffers[*channels::IndexOf(proto::CHANNEL_RGB)] = rgb.data();
 
+  // The scene's cameras (the UAV chasing the car, first-person, chase) and
+  // one at eye level 8 m from the first walker that is walking.
+  std::vector<std::pair<std::string, render::CameraView>> views;
+  for (const sim::CameraSpec& camera : scene.cameras) views.emplace_back(camera.name, graphics.CameraAt(camera, state));
+  for (const traffic::Walker& walker : state.traffic.walkers) {
+    if (walker.linear_velocity.norm() < 0.5) continue;
+    const Eigen::Vector3f target = walker.position.cast<float>() + Eigen::Vector3f(0, 0, 1.0f);
+    const Eigen::Vector3f side(-std::sin(static_cast<float>(walker.heading)), std::cos(static_cast<float>(walker.heading)), 0);
+    render::CameraView view = views.front().second;
+    view.world_from_camera = render::LookAt(target + 8.0f * side + Eigen::Vector3f(2.0f, 0, 0.6f), target,
+                                            Eigen::Vector3f::UnitZ());
+    views.emplace_back("walkers", view);
+    break;
+  }
   std::vector<cv::Mat> rows;  // one per look, the views side by side: sheet.png
   const auto render_all = [&](const std::string& look_name, const render::Look& look) {
     renderer.SetLook(look);
     std::vector<cv::Mat> row;
-    for (const sim::CameraSpec& camera : scene.cameras) {
-      render::CameraView view = graphics.CameraAt(camera, state);
+    for (auto& [name, view] : views) {
       view.previous_world_from_camera = view.world_from_camera;
       renderer.Render(view, graphics.draw_items(), buffers, {});
-      const auto path = out / (camera.name + "_" + look_name + ".png");
+      const auto path = out / (name + "_" + look_name + ".png");
       row.push_back(Save(path, rgb, width, height));
       std::printf("%s\n", path.c_str());
     }

@@ -127,6 +127,10 @@ Usage: sim4cvd [flags]
   --hour H                  local solar time in [0, 24] (default: the preset's own hour)
   --quality Q               full (sky, sun shadows, procedural materials) or fast (flat shading, the
                             cheapest; default full)
+  --randomize SEED          domain randomisation: draw the conditions (preset, hour, exposure, a
+                            colour jitter per object) from SEED, reproducibly (default 0: off)
+  --randomize-every N       with --randomize, new conditions every N frames (default 0: once per
+                            episode, i.e. at start, Reset and LoadMap)
   --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --log FILE                record every frame (poses, tracker and ground-truth boxes, car controls)
                             to the run log FILE (docs/logs.md; extension .s4log by convention)
@@ -227,6 +231,10 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
          config.conditions.preset = *preset;
        }},
       {"--hour", [&](auto& f, auto& v) { hour = ParseNumber<double>(f, v, conditions::kMinHour, conditions::kMaxHour); }},
+      {"--randomize",
+       [&](auto& f, auto& v) { config.randomize_seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
+      {"--randomize-every",
+       [&](auto& f, auto& v) { config.randomize_every_frames = ParseNumber<uint32_t>(f, v, 0, 1000000000); }},
       {"--quality",
        [&](auto& f, auto& v) {
          const auto quality = conditions::FindQuality(v);
@@ -249,6 +257,8 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   SIM4CV_THROW_UNLESS(config.log_label.empty() || !config.log_file.empty(), "--log-label needs --log FILE");
   if (!config.traffic_seed_set) config.traffic.seed = config.seed;
   config.conditions.hour = hour.value_or(conditions::Info(config.conditions.preset).hour);
+  SIM4CV_THROW_UNLESS(config.randomize_every_frames == 0 || config.randomize_seed != 0,
+                      "--randomize-every needs --randomize SEED (a non-zero seed)");
   SIM4CV_THROW_UNLESS(config.replay_only.empty() || !config.replay_file.empty(),
                       "--replay-only needs --replay FILE: it says which entities follow that log");
   // The writer truncates its file before replay could read it.

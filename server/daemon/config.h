@@ -34,6 +34,9 @@ struct Config {
   // Weather, time of day and quality of the RGB images (--conditions,
   // --hour, --quality); clients change them with Configure.set_conditions.
   conditions::Conditions conditions;
+  // Domain randomisation (--randomize SEED, --randomize-every N): 0 = off.
+  uint64_t randomize_seed = 0;
+  uint32_t randomize_every_frames = 0;  // 0: once per episode
   uint64_t seed = 1;
   std::string bind_address = "127.0.0.1";
   uint16_t tcp_port = 0;

@@ -292,6 +292,7 @@ void SimThread::AdvanceFrame() {
   sim::State& state = sim_.state();
   for (uint32_t i = 0; i < config_.substeps_per_frame(); ++i) sim_.world().Step(state, dt);
   ++state.frame_id;
+  if (sim_.AdvanceConditions()) frames_.SetLook(render::LookOf(sim_.conditions()));
   PublishState();
   frames_.Update(state);
   const auto& cameras = sim_.cameras();

@@ -39,7 +39,10 @@ auto Checked(Action&& action) {
 }  // namespace
 
 Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> scene)
-    : config_(config), conditions_(config.conditions) {
+    : config_(config),
+      conditions_(config.conditions),
+      randomize_seed_(config.randomize_seed),
+      randomize_every_(config.randomize_every_frames) {
   if (!config.replay_file.empty()) replay_ = LoadReplayTrack(config, *scene);
   Change ignored;
   Rebuild(std::move(scene), ignored);
@@ -57,6 +60,8 @@ void Simulation::Undo() {
     world_ = std::move(replaced_->world);
     state_ = std::move(replaced_->state);
     cameras_ = std::move(replaced_->cameras);
+    conditions_ = replaced_->conditions;
+    episodes_ = replaced_->episodes;
   } else if (camera_added_) {
     cameras_.pop_back();
   }
@@ -79,12 +84,29 @@ void Simulation::Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change
   if (replay_) world->SetReplay(replay_, config_.replay_only);
   sim::State state = world->InitialState();
   std::vector<sim::CameraSpec> cameras = scene->cameras;
-  replaced_.emplace(Replaced{std::move(scene_), std::move(world_), std::move(state_), std::move(cameras_)});
+  replaced_.emplace(Replaced{std::move(scene_), std::move(world_), std::move(state_), std::move(cameras_),
+                             conditions_, episodes_});
   world_ = std::move(world);
   scene_ = std::move(scene);
   state_ = std::move(state);
   cameras_ = std::move(cameras);
   change.new_scene = true;
+  StartEpisode(change);
+}
+
+// Per-episode randomisation draws episode k's conditions at the start of
+// episode k (the daemon's start is episode 0); per-N-frames draws frame 0's.
+void Simulation::StartEpisode(Change& change) {
+  const uint64_t episode = episodes_++;
+  if (randomize_seed_ == 0) return;
+  conditions_ = conditions::Randomized(randomize_seed_, randomize_every_ == 0 ? episode : 0, conditions_.quality);
+  change.new_conditions = true;
+}
+
+bool Simulation::AdvanceConditions() {
+  if (randomize_seed_ == 0 || randomize_every_ == 0 || state_.frame_id % randomize_every_ != 0) return false;
+  conditions_ = conditions::Randomized(randomize_seed_, state_.frame_id / randomize_every_, conditions_.quality);
+  return true;
 }
 
 Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Configured& answer) {
@@ -367,12 +389,21 @@ void Simulation::QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult
 void Simulation::SetConditions(const proto::SetConditions& request, Change& change) {
   RefuseWhileLogging("SetConditions", "a log holds one look");
   conditions::Conditions next = conditions_;
+  if (!request.quality().empty()) next.quality = *conditions::FindQuality(request.quality());
+  randomize_seed_ = request.randomize_seed();
+  randomize_every_ = request.randomize_every_frames();
+  if (randomize_seed_ != 0) {
+    conditions_ = next;
+    const uint64_t draw = randomize_every_ == 0 ? episodes_ - 1 : state_.frame_id / randomize_every_;  // this episode's
+    conditions_ = conditions::Randomized(randomize_seed_, draw, next.quality);
+    change.new_conditions = true;
+    return;
+  }
   if (!request.preset().empty()) {
     next.preset = *conditions::FindByName(request.preset());
     next.hour = conditions::Info(next.preset).hour;
   }
   if (request.has_hour()) next.hour = request.hour();
-  if (!request.quality().empty()) next.quality = *conditions::FindQuality(request.quality());
   conditions_ = next;
   change.new_conditions = true;
 }
@@ -403,6 +434,10 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   look.set_preset(std::string(conditions::Info(conditions_.preset).name));
   look.set_hour(conditions_.hour);
   look.set_quality(std::string(conditions::QualityName(conditions_.quality)));
+  look.set_exposure(conditions_.exposure);
+  look.set_variation(conditions_.variation);
+  look.set_randomize_seed(randomize_seed_);
+  look.set_randomize_every_frames(randomize_every_);
 }
 
 }  // namespace sim4cv::daemon

@@ -69,8 +69,12 @@ class Simulation {
   // The world's entities, cameras and routes as a client sees them.
   void FillWorldInfo(proto::WorldInfo& out) const;
 
-  // Weather, time of day and quality: the config's, then the last SetConditions'.
+  // Weather, time of day and quality: the config's, then the last SetConditions',
+  // or the draw of the domain randomisation in force.
   const conditions::Conditions& conditions() const { return conditions_; }
+  // Once per frame, after State::frame_id advanced: true if the domain
+  // randomisation drew new conditions for this frame (every N frames).
+  bool AdvanceConditions();
 
  private:
   void Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change);
@@ -95,6 +99,8 @@ class Simulation {
     std::unique_ptr<sim::World> world;
     sim::State state;
     std::vector<sim::CameraSpec> cameras;
+    conditions::Conditions conditions;  // a new episode may draw new ones
+    uint64_t episodes = 0;
   };
 
   const Config& config_;
@@ -105,6 +111,12 @@ class Simulation {
   sim::State state_;
   std::vector<sim::CameraSpec> cameras_;
   conditions::Conditions conditions_;
+  // Domain randomisation: seed (0: off), period (0: per episode) and the
+  // episodes begun, which number the per-episode draws.
+  uint64_t randomize_seed_ = 0;
+  uint32_t randomize_every_ = 0;
+  uint64_t episodes_ = 0;
+  void StartEpisode(Change& change);
   std::shared_ptr<const runlog::ReplayTrack> replay_;  // --replay; kept across Reset
 };
 

@@ -89,6 +89,8 @@ Look LookOf(const conditions::Conditions& conditions) {
       break;
   }
   look.shadows = look.full && sunny && day > 0.2f;
+  look.exposure *= static_cast<float>(conditions.exposure);
+  look.variation = conditions.variation;
   return look;
 }
 

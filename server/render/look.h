@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "protocol/conditions.h"
 
@@ -22,6 +23,7 @@ struct Look {
   float wetness = 0.0f;       // 0 dry .. 1 puddled
   float lights = 0.0f;        // lit windows, lanterns and car lights, 0..1
   float exposure = 1.0f;      // multiplies radiance before tone mapping
+  uint32_t variation = 0;     // 0: none; else the seed of a colour jitter per object (domain randomisation)
 };
 
 // The look of `conditions`; the sun follows the hour (east at 6, south at

@@ -11,6 +11,7 @@ void LookUniforms::Locate(GLuint program) {
   ambient_ground_ = locate("u_ambient_ground");
   fog_ = locate("u_fog");
   fog_density_ = locate("u_fog_density");
+  variation_ = locate("u_variation");
   weather_ = locate("u_weather");
   camera_position_ = locate("u_camera_position");
   shadow_from_world_ = locate("u_shadow_from_world");
@@ -28,6 +29,7 @@ void LookUniforms::Apply(const Look& look, const Eigen::Vector3f& camera_positio
   glUniform3fv(ambient_ground_, 1, look.ambient_ground.data());
   glUniform4f(fog_, look.fog_colour.x(), look.fog_colour.y(), look.fog_colour.z(), look.fog_density);
   glUniform1f(fog_density_, look.fog_density);
+  glUniform1ui(variation_, look.variation);
   glUniform4f(weather_, look.clouds, look.wetness, look.lights, look.exposure);
   glUniform3fv(camera_position_, 1, camera_position.data());
   glUniformMatrix4fv(shadow_from_world_, 1, GL_FALSE, shadow.shadow_from_world.data());

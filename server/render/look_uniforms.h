@@ -31,7 +31,7 @@ class LookUniforms {
 
  private:
   GLint sun_ = -1, sky_zenith_ = -1, sky_horizon_ = -1, ambient_sky_ = -1, ambient_ground_ = -1, fog_ = -1;
-  GLint fog_density_ = -1;
+  GLint fog_density_ = -1, variation_ = -1;
   GLint weather_ = -1, camera_position_ = -1, shadow_from_world_ = -1;
   GLint shadow_texel_ = -1, shadow_map_ = -1, to_light_ = -1;
 };

@@ -19,17 +19,28 @@ uniform vec3 u_camera_position;  // world
 uniform mat4 u_shadow_from_world;  // to the shadow map's [0,1]^3
 uniform float u_shadow_texel;      // one shadow-map texel in [0,1] units
 uniform sampler2DShadow u_shadow_map;
+uniform uint u_variation;          // 0: none; else the seed of a colour jitter per object
 
 // Integer hashing: a few SIMD integer ops per value where a float hash
 // takes about twenty (llvmpipe pays per instruction).
 const uint kHashX = 0x8da6b343u, kHashY = 0xd8163841u;
-float HashU(uint h) {
+uint Mix(uint h) {
   h ^= h >> 16;
   h *= 0x7feb352du;
   h ^= h >> 15;
   h *= 0x846ca68bu;
-  h ^= h >> 16;
-  return float(h >> 8) * (1.0 / 16777216.0);
+  return h ^ (h >> 16);
+}
+float HashU(uint h) { return float(Mix(h) >> 8) * (1.0 / 16777216.0); }
+
+// Domain randomisation's colour jitter: each labelled object (by instance)
+// and each class of unlabelled surface (road, grass...) gets its own tint,
+// the same in every frame of one u_variation.
+vec3 Vary(vec3 base, uint semantic) {
+  if (u_variation == 0u) return base;
+  uint h = Mix((u_instance != 0u ? u_instance : semantic + 65536u) * 0x9e3779b9u ^ u_variation);
+  vec3 jitter = vec3(uvec3(h, h >> 8, h >> 16) & 255u) / 255.0;
+  return clamp(base * (0.65 + 0.7 * jitter), 0.0, 1.0);
 }
 // A value in [0, 1) per integer cell; `cell` holds whole numbers (floor()).
 float Hash(vec2 cell) {
@@ -184,7 +195,7 @@ vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic, float fog) {
   vec3 to_eye_full = u_camera_position - p;
   float distance = length(to_eye_full);
   vec3 to_eye = to_eye_full / distance;
-  Surface s = Material(semantic, base, p, n, distance);
+  Surface s = Material(semantic, Vary(base, semantic), p, n, distance);
   float direct = max(dot(n, u_to_light), 0.0) * SunVisibility(p, n);
   vec3 ambient = mix(u_ambient_ground, u_ambient_sky, 0.5 + 0.5 * n.z);
   vec3 half_way = normalize(u_to_light + to_eye);

@@ -22,6 +22,7 @@ constexpr const char* kFragmentHeader = R"(#version 330 core
 in vec2 v_clip;
 uniform mat4 u_world_from_clip;
 uniform vec3 u_to_light;
+uniform uint u_instance;  // shading.h's Vary reads it; the sky is no object
 layout(location = 0) out vec4 out_rgb;
 )";
 

@@ -186,6 +186,10 @@ std::string CheckSetConditions(const proto::SetConditions& request) {
   check.True(request.quality().empty() || conditions::FindQuality(request.quality()).has_value(), [&] {
     return "SetConditions.quality " + Quoted(request.quality()) + " is not a quality; use \"full\" or \"fast\"";
   });
+  check.True(request.randomize_every_frames() == 0 || request.randomize_seed() != 0, [&] {
+    return "SetConditions.randomize_every_frames is " + std::to_string(request.randomize_every_frames()) +
+           " without a randomize_seed; give a non-zero seed or leave it 0";
+  });
   return check.problem();
 }
 

@@ -67,6 +67,32 @@ TEST_F(ConditionsTest, BadPresetHourAndQualityAreRefusedAndTheConnectionStays) {
   EXPECT_EQ(client->SetConditions("", 18.0).conditions().hour(), 18.0);
 }
 
+// Two daemons with the same randomisation seed render the same images frame
+// for frame while the conditions change every 4 frames.
+TEST_F(ConditionsTest, RandomisedRunsRepeatFromTheirSeed) {
+  const std::vector<std::string> args = {"--randomize", "77", "--randomize-every", "4"};
+  std::vector<std::string> first;
+  for (int run = 0; run < 2; ++run) {
+    StartDaemon(args);
+    const auto client = Connect("randomised");
+    const proto::WorldInfo world = client->GetWorld();
+    EXPECT_EQ(world.conditions().randomize_seed(), 77u);
+    EXPECT_EQ(world.conditions().randomize_every_frames(), 4u);
+    EXPECT_NE(world.conditions().variation(), 0u);
+    client->Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_LOCKSTEP);
+    for (int i = 0; i < 12; ++i) {
+      const std::string rgb = Plane(client->StepAndReceive(), proto::CHANNEL_RGB);
+      if (run == 0) {
+        first.push_back(rgb);
+      } else {
+        EXPECT_EQ(rgb, first[static_cast<std::size_t>(i)]) << "frame " << i + 1;
+      }
+    }
+    daemon_.reset();
+  }
+  EXPECT_NE(first[1], first[9]) << "new conditions every 4 frames";
+}
+
 TEST(ConditionsFlagsTest, BadFlagsStopTheDaemonNamingTheValue) {
   const auto [status, err] = RunToExit({"--conditions", "snow"});
   EXPECT_NE(status, 0);
@@ -74,6 +100,9 @@ TEST(ConditionsFlagsTest, BadFlagsStopTheDaemonNamingTheValue) {
   const auto [hour_status, hour_err] = RunToExit({"--hour", "-3"});
   EXPECT_NE(hour_status, 0);
   EXPECT_NE(hour_err.find("--hour is -3"), std::string::npos) << hour_err;
+  const auto [every_status, every_err] = RunToExit({"--randomize-every", "10"});
+  EXPECT_NE(every_status, 0);
+  EXPECT_NE(every_err.find("--randomize-every needs --randomize SEED"), std::string::npos) << every_err;
 }
 
 }  // namespace

@@ -174,3 +174,6 @@ def test_conditions_change_rgb_only_and_bad_ones_are_refused(connect):
     refused(lambda: client.set_conditions("sandstorm"), pb.ERROR_CODE_INVALID_ARGUMENT,
             "SetConditions.preset 'sandstorm' is not a preset", "clear_morning")
     refused(lambda: client.set_conditions(hour=-1), pb.ERROR_CODE_INVALID_ARGUMENT, "SetConditions.hour is -1")
+    randomised = client.set_conditions(randomize_seed=5).conditions
+    assert randomised.randomize_seed == 5 and randomised.variation != 0
+    assert client.reset().conditions.variation != randomised.variation, "a new episode draws new conditions"

@@ -44,6 +44,29 @@ TEST(ConditionsTest, PresetsAreListedOnceAndFoundByName) {
             "rain at 15.00 h, fast quality");
 }
 
+TEST(ConditionsTest, RandomisationIsReproducibleFromItsSeedAndCoversThePresets) {
+  std::set<Preset> seen;
+  for (uint64_t draw = 0; draw < 60; ++draw) {
+    const conditions::Conditions a = conditions::Randomized(42, draw, Quality::kFull);
+    const conditions::Conditions b = conditions::Randomized(42, draw, Quality::kFull);
+    EXPECT_EQ(a.preset, b.preset);
+    EXPECT_EQ(a.hour, b.hour);
+    EXPECT_EQ(a.exposure, b.exposure);
+    EXPECT_EQ(a.variation, b.variation);
+    EXPECT_GE(a.hour, conditions::kMinHour);
+    EXPECT_LT(a.hour, conditions::kMaxHour);
+    EXPECT_GE(a.exposure, 0.7);
+    EXPECT_LE(a.exposure, 1.4);
+    EXPECT_NE(a.variation, 0u);
+    const bool sun_up = LookOf(a).to_sun.z() > 0.0f && LookOf(a).lights < 1.0f;
+    EXPECT_EQ(sun_up, a.preset != Preset::NIGHT) << conditions::Describe(a);
+    seen.insert(a.preset);
+  }
+  EXPECT_EQ(seen.size(), conditions::kPresets.size()) << "60 draws reach every preset";
+  EXPECT_NE(conditions::Randomized(42, 0, Quality::kFull).variation, conditions::Randomized(43, 0, Quality::kFull).variation);
+  EXPECT_EQ(conditions::Randomized(42, 0, Quality::kFast).quality, Quality::kFast);
+}
+
 TEST(LookTest, TheSunRisesInTheEastStandsSouthAtNoonAndSetsInTheWest) {
   const auto sun = [](double hour) { return LookOf({Preset::CLEAR_NOON, hour, Quality::kFull}).to_sun; };
   EXPECT_GT(sun(7.0).x(), 0.8f);
@@ -164,6 +187,7 @@ TEST_F(LookRenderTest, GroundTruthIsByteIdenticalInEveryPresetAndQuality) {
     std::vector<conditions::Conditions> all;
     for (const conditions::PresetInfo& info : conditions::kPresets) all.push_back(conditions::Of(info.preset));
     all.push_back({Preset::CLEAR_NOON, 7.0, Quality::kFull});
+    all.push_back(conditions::Randomized(9, 3, Quality::kFull));  // exposure and a colour jitter per object
     for (const conditions::Conditions& look : all) {
       SCOPED_TRACE(conditions::Describe(look));
       const Shot shot = Render(camera, look);

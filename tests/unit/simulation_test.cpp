@@ -88,6 +88,42 @@ TEST_F(SimulationTest, SetConditionsIsRefusedWhileLogging) {
   EXPECT_EQ(sim.conditions().preset, conditions::Preset::CLEAR_NOON);
 }
 
+TEST_F(SimulationTest, RandomisationDrawsPerEpisodeOrEveryNFramesFromItsSeed) {
+  Config per_episode;
+  per_episode.randomize_seed = 11;
+  Simulation sim(per_episode, std::make_shared<const sim::Scene>(sim::DefaultScene(320, 180)));
+  const auto same = [](const conditions::Conditions& a, const conditions::Conditions& b) {
+    return a.preset == b.preset && a.hour == b.hour && a.exposure == b.exposure && a.variation == b.variation;
+  };
+  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 0, conditions::Quality::kFull)));
+  EXPECT_FALSE(sim.AdvanceConditions()) << "per episode: frames do not draw";
+  proto::Configure reset;
+  reset.mutable_reset();
+  EXPECT_TRUE(sim.Apply(reset, answer_).new_conditions);
+  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 1, conditions::Quality::kFull)));
+  EXPECT_EQ(answer_.world().conditions().randomize_seed(), 11u);
+  EXPECT_EQ(answer_.world().conditions().variation(), conditions::Randomized(11, 1, conditions::Quality::kFull).variation);
+
+  // Every 5 frames, through SetConditions.
+  proto::Configure every;
+  every.mutable_set_conditions()->set_randomize_seed(11);
+  every.mutable_set_conditions()->set_randomize_every_frames(5);
+  sim.Apply(every, answer_);
+  sim.state().frame_id = 9;
+  EXPECT_FALSE(sim.AdvanceConditions());
+  sim.state().frame_id = 10;
+  EXPECT_TRUE(sim.AdvanceConditions());
+  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 2, conditions::Quality::kFull)));
+  // An explicit preset stops it.
+  proto::Configure fixed;
+  fixed.mutable_set_conditions()->set_preset("fog");
+  sim.Apply(fixed, answer_);
+  sim.state().frame_id = 15;
+  EXPECT_FALSE(sim.AdvanceConditions());
+  EXPECT_EQ(sim.conditions().preset, conditions::Preset::FOG);
+  EXPECT_EQ(answer_.world().conditions().randomize_seed(), 0u);
+}
+
 TEST_F(SimulationTest, SpawnAnswersTheIdAndTheWorld) {
   Apply(SpawnUav("scout"));
   EXPECT_EQ(answer_.request_id(), 5u);

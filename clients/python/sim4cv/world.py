@@ -61,14 +61,18 @@ class WorldRequests:
         waypoints = pb.Waypoints(points=[pb.Vec2(x=x, y=y) for x, y in points], closed=closed)
         return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, waypoints=waypoints, speed=speed))
 
-    def set_conditions(self, preset="", hour=None, quality=""):
+    def set_conditions(self, preset="", hour=None, quality="", randomize_seed=0, randomize_every_frames=0):
         """Weather and time of day of the RGB images from the next frame on:
         preset "clear_noon", "clear_morning", "overcast", "fog", "dusk",
         "night" or "rain" ("": keep), hour in [0, 24] (None: the preset's
-        own), quality "full" or "fast" ("": keep). Depth, masks, boxes and
-        the other channels never change with them. Returns the WorldInfo,
-        whose .conditions says what is in force."""
-        request = pb.SetConditions(preset=preset, quality=quality)
+        own), quality "full" or "fast" ("": keep). randomize_seed != 0:
+        domain randomisation instead, reproducible from the seed, new
+        conditions every randomize_every_frames frames (0: each episode,
+        i.e. now and at every reset/load_map). Depth, masks, boxes and the
+        other channels never change with them. Returns the WorldInfo, whose
+        .conditions says what is in force."""
+        request = pb.SetConditions(preset=preset, quality=quality, randomize_seed=randomize_seed,
+                                   randomize_every_frames=randomize_every_frames)
         if hour is not None:
             request.hour = hour
         return self._configure_world(set_conditions=request)

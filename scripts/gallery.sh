@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Regenerates docs/gallery.md and its pictures (docs/gallery/*.png): the same
+# moment of the densest urban map with traffic, seen by the UAV chasing the
+# car, the car's first-person and chase cameras and an eye-level camera by
+# walkers, in the flat look of --quality fast ("before") and in every
+# conditions preset. Deterministic: rerunning gives the same PNGs.
+#   bash scripts/gallery.sh            (after a build in build/)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${SIM4CV_BUILD_DIR:-build}
+OUT=docs/gallery
+cmake --build "$BUILD_DIR" -j"$(nproc)" --target sim4cv_gallery > /dev/null
+rm -rf "$OUT"
+mkdir -p "$OUT"
+start=$(date +%s%N)
+"$BUILD_DIR/tools/sim4cv_gallery" --out "$OUT" --width 400 --height 225 > /dev/null
+rm -f "$OUT/sheet.png"
+seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { print (b - a) / 1e9 }')
+
+views="uav car_front car_chase walkers"
+looks="fast $(sed -n 's/^ *X(\([A-Z_]*\), "\([a-z_]*\)".*/\2/p' protocol/conditions.h | tr '\n' ' ')"
+{
+  echo "# Gallery"
+  echo
+  echo "Made by \`bash scripts/gallery.sh\` ($(nproc) cores, $(printf '%.1f' "$seconds") s, $(date -u +%Y-%m-%d)): the"
+  echo "map \`scenes/driving/train/01_urban.map\` with 12 moving cars, 20 parked and 16 walkers, 10 s after"
+  echo "the start, 400x225. Rows: the flat look of \`--quality fast\` (what every frame looked like before"
+  echo "the look existed), then each \`--conditions\` preset at its own hour (protocol/conditions.h)."
+  echo "Columns: the UAV chasing the target car, the car's first-person camera, the chase camera, an"
+  echo "eye-level camera by a walker. Depth, masks, boxes, semantic labels, normals and flow are the"
+  echo "same in every row (tests/unit/look_test.cpp)."
+  echo
+  echo "| look | $(echo $views | sed 's/ / | /g') |"
+  echo "|---|$(for _ in $views; do printf -- '---|'; done)"
+  for look in $looks; do
+    printf '| %s |' "$look"
+    for view in $views; do printf ' ![%s %s](gallery/%s_%s.png) |' "$view" "$look" "$view" "$look"; done
+    echo
+  done
+} > docs/gallery.md
+echo "gallery: docs/gallery.md, $(ls "$OUT" | wc -l) pictures in $OUT/ ($(du -sh "$OUT" | cut -f1))"
