@@ -73,7 +73,13 @@ struct Conditions {
   Quality quality = Quality::kFull;
   double exposure = 1.0;   // multiplies the preset's exposure
   uint32_t variation = 0;  // 0: every surface its own colour; else the seed of a colour jitter per object
+  // Sensor noise of the full look, off (0) by default: read noise (standard
+  // deviation in 8-bit levels) and shot noise (variance = gain * level).
+  double noise_read = 0.0, noise_shot = 0.0;
 };
+
+inline constexpr double kMaxNoiseRead = 50.0;  // levels
+inline constexpr double kMaxNoiseShot = 10.0;
 
 // The preset at its own hour.
 inline Conditions Of(Preset preset, Quality quality = Quality::kFull) {
@@ -99,14 +105,18 @@ inline std::string Describe(const Conditions& conditions) {
     std::snprintf(text, sizeof text, ", exposure %.2f, variation %u", conditions.exposure, conditions.variation);
     description += text;
   }
+  if (conditions.noise_read != 0.0 || conditions.noise_shot != 0.0) {
+    std::snprintf(text, sizeof text, ", noise read %.2f shot %.2f", conditions.noise_read, conditions.noise_shot);
+    description += text;
+  }
   return description;
 }
 
 // Domain randomisation: draw number `draw` of the sequence `seed` gives
 // (the same conditions for the same seed and draw, on any machine): a
 // preset, an hour that suits it, an exposure in [0.7, 1.4] and a colour
-// variation seed.
-inline Conditions Randomized(uint64_t seed, uint64_t draw, Quality quality) {
+// variation seed; `base`'s quality and sensor noise stay.
+inline Conditions Randomized(uint64_t seed, uint64_t draw, const Conditions& base) {
   uint64_t state = seed ^ (draw * 0x9E3779B97F4A7C15ull);
   const auto next = [&state] {  // splitmix64
     uint64_t z = (state += 0x9E3779B97F4A7C15ull);
@@ -117,8 +127,7 @@ inline Conditions Randomized(uint64_t seed, uint64_t draw, Quality quality) {
   const auto uniform = [&next](double low, double high) {
     return low + (high - low) * static_cast<double>(next() >> 11) * 0x1.0p-53;
   };
-  Conditions conditions;
-  conditions.quality = quality;
+  Conditions conditions = base;  // its quality and noise stay
   conditions.preset = kPresets[next() % kPresets.size()].preset;
   switch (conditions.preset) {
     case Preset::CLEAR_MORNING: conditions.hour = next() % 2 ? uniform(6.8, 9.0) : uniform(15.0, 17.0); break;

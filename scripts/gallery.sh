@@ -13,19 +13,21 @@ cmake --build "$BUILD_DIR" -j"$(nproc)" --target sim4cv_gallery > /dev/null
 rm -rf "$OUT"
 mkdir -p "$OUT"
 start=$(date +%s%N)
-"$BUILD_DIR/tools/sim4cv_gallery" --out "$OUT" --width 400 --height 225 > /dev/null
+"$BUILD_DIR/tools/sim4cv_gallery" --out "$OUT" --width 320 --height 180 > /dev/null
 rm -f "$OUT/sheet.png"
 seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { print (b - a) / 1e9 }')
 
 views="uav car_front car_chase walkers"
-looks="fast $(sed -n 's/^ *X(\([A-Z_]*\), "\([a-z_]*\)".*/\2/p' protocol/conditions.h | tr '\n' ' ')"
+looks="fast $(sed -n 's/^ *X(\([A-Z_]*\), "\([a-z_]*\)".*/\2/p' protocol/conditions.h | tr '\n' ' ') noise randomised_0 randomised_1 randomised_2"
 {
   echo "# Gallery"
   echo
   echo "Made by \`bash scripts/gallery.sh\` ($(nproc) cores, $(printf '%.1f' "$seconds") s, $(date -u +%Y-%m-%d)): the"
   echo "map \`scenes/driving/train/01_urban.map\` with 12 moving cars, 20 parked and 16 walkers, 10 s after"
-  echo "the start, 400x225. Rows: the flat look of \`--quality fast\` (what every frame looked like before"
-  echo "the look existed), then each \`--conditions\` preset at its own hour (protocol/conditions.h)."
+  echo "the start, 320x180. Rows: the flat look of \`--quality fast\` (what every frame looked like before"
+  echo "the look existed), then each \`--conditions\` preset at its own hour (protocol/conditions.h),"
+  echo "then clear_noon with sensor noise (\`--noise-read 3 --noise-shot 1.5\`) and three draws of domain"
+  echo "randomisation (\`--randomize 2026\`: draws 0, 1, 2)."
   echo "Columns: the UAV chasing the target car, the car's first-person camera, the chase camera, an"
   echo "eye-level camera by a walker. Depth, masks, boxes, semantic labels, normals and flow are the"
   echo "same in every row (tests/unit/look_test.cpp)."

@@ -100,6 +100,14 @@ int main(int argc, char** argv) try {
   for (const conditions::PresetInfo& preset : conditions::kPresets) {
     render_all(std::string(preset.name), render::LookOf(conditions::Of(preset.preset)));
   }
+  // Camera effects and domain randomisation.
+  conditions::Conditions noisy = conditions::Of(conditions::Preset::CLEAR_NOON);
+  noisy.noise_read = 3.0;
+  noisy.noise_shot = 1.5;
+  render_all("noise", render::LookOf(noisy));
+  for (uint64_t draw = 0; draw < 3; ++draw) {
+    render_all("randomised_" + std::to_string(draw), render::LookOf(conditions::Randomized(2026, draw, {})));
+  }
   cv::Mat sheet;
   cv::vconcat(rows, sheet);
   cv::imwrite((out / "sheet.png").string(), sheet);

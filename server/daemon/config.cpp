@@ -127,6 +127,9 @@ Usage: sim4cvd [flags]
   --hour H                  local solar time in [0, 24] (default: the preset's own hour)
   --quality Q               full (sky, sun shadows, procedural materials) or fast (flat shading, the
                             cheapest; default full)
+  --noise-read DN           sensor read noise of the full look: standard deviation in 8-bit levels,
+                            0 .. 50 (default 0: off)
+  --noise-shot K            sensor shot noise: variance K times the level, 0 .. 10 (default 0: off)
   --randomize SEED          domain randomisation: draw the conditions (preset, hour, exposure, a
                             colour jitter per object) from SEED, reproducibly (default 0: off)
   --randomize-every N       with --randomize, new conditions every N frames (default 0: once per
@@ -231,6 +234,10 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
          config.conditions.preset = *preset;
        }},
       {"--hour", [&](auto& f, auto& v) { hour = ParseNumber<double>(f, v, conditions::kMinHour, conditions::kMaxHour); }},
+      {"--noise-read",
+       [&](auto& f, auto& v) { config.conditions.noise_read = ParseNumber<double>(f, v, 0, conditions::kMaxNoiseRead); }},
+      {"--noise-shot",
+       [&](auto& f, auto& v) { config.conditions.noise_shot = ParseNumber<double>(f, v, 0, conditions::kMaxNoiseShot); }},
       {"--randomize",
        [&](auto& f, auto& v) { config.randomize_seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
       {"--randomize-every",

@@ -26,7 +26,15 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   header.physics_hz = config.physics_hz;
   header.frame_hz = config.frame_hz;
   header.seed = config.seed;
-  header.conditions = conditions::Describe(config.conditions);  // fixed while logging (SetConditions is refused)
+  // Fixed while logging (SetConditions is refused), or drawn from a seed:
+  // every frame's conditions follow from it (conditions::Randomized).
+  header.conditions = config.randomize_seed == 0
+                          ? conditions::Describe(config.conditions)
+                          : "randomised from seed " + std::to_string(config.randomize_seed) +
+                                (config.randomize_every_frames == 0
+                                     ? std::string(", once per episode")
+                                     : ", every " + std::to_string(config.randomize_every_frames) + " frames") +
+                                ", " + std::string(conditions::QualityName(config.conditions.quality)) + " quality";
   // The entities and cameras at the start; records hold every entity
   // present at their frame, so ones spawned later appear there by id.
   for (const sim::Entity& entity : initial.entities) {

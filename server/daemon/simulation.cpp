@@ -99,13 +99,13 @@ void Simulation::Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change
 void Simulation::StartEpisode(Change& change) {
   const uint64_t episode = episodes_++;
   if (randomize_seed_ == 0) return;
-  conditions_ = conditions::Randomized(randomize_seed_, randomize_every_ == 0 ? episode : 0, conditions_.quality);
+  conditions_ = conditions::Randomized(randomize_seed_, randomize_every_ == 0 ? episode : 0, conditions_);
   change.new_conditions = true;
 }
 
 bool Simulation::AdvanceConditions() {
   if (randomize_seed_ == 0 || randomize_every_ == 0 || state_.frame_id % randomize_every_ != 0) return false;
-  conditions_ = conditions::Randomized(randomize_seed_, state_.frame_id / randomize_every_, conditions_.quality);
+  conditions_ = conditions::Randomized(randomize_seed_, state_.frame_id / randomize_every_, conditions_);
   return true;
 }
 
@@ -390,12 +390,13 @@ void Simulation::SetConditions(const proto::SetConditions& request, Change& chan
   RefuseWhileLogging("SetConditions", "a log holds one look");
   conditions::Conditions next = conditions_;
   if (!request.quality().empty()) next.quality = *conditions::FindQuality(request.quality());
+  if (request.has_noise_read()) next.noise_read = request.noise_read();
+  if (request.has_noise_shot()) next.noise_shot = request.noise_shot();
   randomize_seed_ = request.randomize_seed();
   randomize_every_ = request.randomize_every_frames();
   if (randomize_seed_ != 0) {
-    conditions_ = next;
     const uint64_t draw = randomize_every_ == 0 ? episodes_ - 1 : state_.frame_id / randomize_every_;  // this episode's
-    conditions_ = conditions::Randomized(randomize_seed_, draw, next.quality);
+    conditions_ = conditions::Randomized(randomize_seed_, draw, next);
     change.new_conditions = true;
     return;
   }
@@ -438,6 +439,8 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   look.set_variation(conditions_.variation);
   look.set_randomize_seed(randomize_seed_);
   look.set_randomize_every_frames(randomize_every_);
+  look.set_noise_read(conditions_.noise_read);
+  look.set_noise_shot(conditions_.noise_shot);
 }
 
 }  // namespace sim4cv::daemon

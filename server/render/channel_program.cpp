@@ -57,11 +57,12 @@ uniform vec3 u_to_light;
 uniform vec2 u_viewport;
 )";
 
-std::string FragmentShader(PlaneSet planes, ChannelProgram::RgbLook look) {
+std::string FragmentShader(PlaneSet planes, uint32_t look) {
   std::string declarations = kFragmentInputs;
   const std::size_t after_version = declarations.find('\n') + 1;
-  if (look == ChannelProgram::RgbLook::kFullShadowed) declarations.insert(after_version, "#define SIM4CV_SHADOWS\n");
-  if (look != ChannelProgram::RgbLook::kFast) declarations.insert(after_version, "#define SIM4CV_FULL_LOOK\n");
+  if (look & ChannelProgram::kNoise) declarations.insert(after_version, "#define SIM4CV_SENSOR_NOISE\n");
+  if (look & ChannelProgram::kShadows) declarations.insert(after_version, "#define SIM4CV_SHADOWS\n");
+  if (look & ChannelProgram::kFull) declarations.insert(after_version, "#define SIM4CV_FULL_LOOK\n");
   std::string body = "void main() {\n";
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     if ((planes & (1u << i)) == 0) continue;
@@ -76,7 +77,7 @@ std::string FragmentShader(PlaneSet planes, ChannelProgram::RgbLook look) {
 
 }  // namespace
 
-ChannelProgram::ChannelProgram(PlaneSet planes, RgbLook look) : planes_(planes) {
+ChannelProgram::ChannelProgram(PlaneSet planes, uint32_t look) : planes_(planes) {
   const std::string fragment = FragmentShader(planes, look);
   program_ = LinkProgram(kVertexShader, fragment.c_str());
   const auto locate = [&](const char* name) { return glGetUniformLocation(program_, name); };

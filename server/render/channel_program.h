@@ -17,10 +17,12 @@ using PlaneSet = uint32_t;
 
 class ChannelProgram {
  public:
-  // How RGB is drawn: the fast look, the full one, or the full one with sun shadows.
-  enum class RgbLook { kFast, kFull, kFullShadowed };
-  inline static constexpr int kRgbLooks = 3;
-  ChannelProgram(PlaneSet planes, RgbLook look);
+  // How RGB is drawn, as compile-time switches of the GLSL (llvmpipe would
+  // pay for a uniform branch's untaken side): the full look (else the
+  // fast one), and in the full look sun shadows and sensor noise.
+  enum RgbLook : uint32_t { kFast = 0, kFull = 1, kShadows = 2, kNoise = 4 };
+  inline static constexpr uint32_t kRgbLooks = 8;  // every combination of the bits
+  ChannelProgram(PlaneSet planes, uint32_t look);
   ~ChannelProgram();
   ChannelProgram(const ChannelProgram&) = delete;
   ChannelProgram& operator=(const ChannelProgram&) = delete;

@@ -91,6 +91,8 @@ Look LookOf(const conditions::Conditions& conditions) {
   look.shadows = look.full && sunny && day > 0.2f;
   look.exposure *= static_cast<float>(conditions.exposure);
   look.variation = conditions.variation;
+  look.noise_read = static_cast<float>(conditions.noise_read);
+  look.noise_shot = static_cast<float>(conditions.noise_shot);
   return look;
 }
 

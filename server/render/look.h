@@ -24,6 +24,8 @@ struct Look {
   float lights = 0.0f;        // lit windows, lanterns and car lights, 0..1
   float exposure = 1.0f;      // multiplies radiance before tone mapping
   uint32_t variation = 0;     // 0: none; else the seed of a colour jitter per object (domain randomisation)
+  float noise_read = 0.0f;    // sensor noise: read noise, standard deviation in 8-bit levels
+  float noise_shot = 0.0f;    // ... shot noise: variance = noise_shot * level
 };
 
 // The look of `conditions`; the sun follows the hour (east at 6, south at

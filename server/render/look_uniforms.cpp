@@ -12,6 +12,8 @@ void LookUniforms::Locate(GLuint program) {
   fog_ = locate("u_fog");
   fog_density_ = locate("u_fog_density");
   variation_ = locate("u_variation");
+  noise_ = locate("u_noise");
+  noise_seed_ = locate("u_noise_seed");
   weather_ = locate("u_weather");
   camera_position_ = locate("u_camera_position");
   shadow_from_world_ = locate("u_shadow_from_world");
@@ -20,8 +22,8 @@ void LookUniforms::Locate(GLuint program) {
   to_light_ = locate("u_to_light");
 }
 
-void LookUniforms::Apply(const Look& look, const Eigen::Vector3f& camera_position,
-                         const ShadowSampling& shadow) const {
+void LookUniforms::Apply(const Look& look, const Eigen::Vector3f& camera_position, const ShadowSampling& shadow,
+                         uint32_t noise_seed) const {
   glUniform3fv(sun_, 1, look.sun.data());
   glUniform3fv(sky_zenith_, 1, look.sky_zenith.data());
   glUniform3fv(sky_horizon_, 1, look.sky_horizon.data());
@@ -30,6 +32,8 @@ void LookUniforms::Apply(const Look& look, const Eigen::Vector3f& camera_positio
   glUniform4f(fog_, look.fog_colour.x(), look.fog_colour.y(), look.fog_colour.z(), look.fog_density);
   glUniform1f(fog_density_, look.fog_density);
   glUniform1ui(variation_, look.variation);
+  glUniform2f(noise_, look.noise_read / 255.0f, look.noise_shot / 255.0f);  // in [0, 1] units
+  glUniform1ui(noise_seed_, noise_seed);
   glUniform4f(weather_, look.clouds, look.wetness, look.lights, look.exposure);
   glUniform3fv(camera_position_, 1, camera_position.data());
   glUniformMatrix4fv(shadow_from_world_, 1, GL_FALSE, shadow.shadow_from_world.data());

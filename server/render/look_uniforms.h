@@ -27,11 +27,12 @@ class LookUniforms {
   // Finds the uniforms in `program` (those it does not use stay -1).
   void Locate(GLuint program);
   // Sets them in the current program (which must be the located one).
-  void Apply(const Look& look, const Eigen::Vector3f& camera_position, const ShadowSampling& shadow) const;
+  void Apply(const Look& look, const Eigen::Vector3f& camera_position, const ShadowSampling& shadow,
+             uint32_t noise_seed) const;
 
  private:
   GLint sun_ = -1, sky_zenith_ = -1, sky_horizon_ = -1, ambient_sky_ = -1, ambient_ground_ = -1, fog_ = -1;
-  GLint fog_density_ = -1, variation_ = -1;
+  GLint fog_density_ = -1, variation_ = -1, noise_ = -1, noise_seed_ = -1;
   GLint weather_ = -1, camera_position_ = -1, shadow_from_world_ = -1;
   GLint shadow_texel_ = -1, shadow_map_ = -1, to_light_ = -1;
 };

@@ -66,6 +66,9 @@ struct CameraView {
   float far_m = 1000.0f;
   uint32_t width = 320;
   uint32_t height = 180;
+  // Seeds this frame's sensor noise (look.h), so a frame is repeatable: the
+  // daemon uses the frame id and the camera.
+  uint32_t noise_seed = 0;
 };
 
 // Where one render writes its channels, one pointer per entry of

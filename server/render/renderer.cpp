@@ -127,7 +127,7 @@ struct Renderer::Impl {
   void UploadMeshes(const std::vector<Mesh>& all_meshes);
   void CreateFramebuffer();
   // Makes the program and render targets for `planes` current.
-  void UsePlanes(PlaneSet planes, ChannelProgram::RgbLook look);
+  void UsePlanes(PlaneSet planes, uint32_t look);
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
   void Draw(const DrawItem& item) const;
   void DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
@@ -187,7 +187,7 @@ void Renderer::Impl::CreateFramebuffer() {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_target);
 }
 
-void Renderer::Impl::UsePlanes(PlaneSet planes, ChannelProgram::RgbLook look) {
+void Renderer::Impl::UsePlanes(PlaneSet planes, uint32_t look) {
   std::array<GLenum, channels::kPixelChannelCount> draw_buffers{};
   for (GLuint i = 0; i < channels::kPixelChannelCount; ++i) {
     draw_buffers[i] = GL_NONE;
@@ -205,7 +205,7 @@ void Renderer::Impl::UsePlanes(PlaneSet planes, ChannelProgram::RgbLook look) {
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
     throw std::runtime_error("renderer framebuffer is incomplete");
   }
-  auto& cached = programs[planes + kPlaneSets * static_cast<uint32_t>(look)];
+  auto& cached = programs[planes + kPlaneSets * look];
   if (!cached) cached = std::make_unique<ChannelProgram>(planes, look);  // once per set of channels and look
   program = cached.get();
   glUseProgram(program->id());
@@ -397,20 +397,24 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CW);
-  using RgbLook = ChannelProgram::RgbLook;
-  gl.UsePlanes(planes, !full_rgb ? RgbLook::kFast : shadow.texture != 0 ? RgbLook::kFullShadowed : RgbLook::kFull);
+  uint32_t rgb_look = ChannelProgram::kFast;
+  if (full_rgb) {
+    rgb_look = ChannelProgram::kFull | (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
+               (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u);
+  }
+  gl.UsePlanes(planes, rgb_look);
   const ChannelProgram& program = *gl.program;
   glUniformMatrix4fv(program.u_view, 1, GL_FALSE, view.data());
   glUniformMatrix4fv(program.u_projection, 1, GL_FALSE, top_row_first.data());
   glUniformMatrix4fv(program.u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
   glUniform3fv(program.u_to_light, 1, to_light.data());
   glUniform2fv(program.u_viewport, 1, viewport.data());
-  if (full_rgb) program.look.Apply(gl.look, camera_position, shadow);
+  if (full_rgb) program.look.Apply(gl.look, camera_position, shadow, camera.noise_seed);
 
   gl.DrawScene(items, FrustumPlanes(projection * view), unoccluded_pixels);
   if (full_rgb) {
     if (!gl.sky) gl.sky = std::make_unique<SkyPass>();
-    gl.sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * view, camera_position, gl.look);
+    gl.sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * view, camera_position, gl.look, camera.noise_seed);
     glUseProgram(program.id());  // the counting pass draws with the scene's program
   }
   gl.ReadBack(camera, out);

@@ -20,6 +20,8 @@ uniform mat4 u_shadow_from_world;  // to the shadow map's [0,1]^3
 uniform float u_shadow_texel;      // one shadow-map texel in [0,1] units
 uniform sampler2DShadow u_shadow_map;
 uniform uint u_variation;          // 0: none; else the seed of a colour jitter per object
+uniform vec2 u_noise;              // sensor noise: read sigma, shot gain, in [0, 1] units; 0, 0: none
+uniform uint u_noise_seed;         // per frame and camera
 
 // Integer hashing: a few SIMD integer ops per value where a float hash
 // takes about twenty (llvmpipe pays per instruction).
@@ -79,8 +81,22 @@ vec3 Sky(vec3 d) {
 // gamma 2 (a square root: llvmpipe pays per instruction, and pow is many).
 vec4 Expose(vec3 radiance, float fog) {
   vec3 c = mix(radiance, u_fog.rgb, fog) * u_weather.w * 1.4;
-  c = c / (1.0 + c);
-  return vec4(sqrt(c), 1.0);
+  c = sqrt(c / (1.0 + c));
+#ifdef SIM4CV_SENSOR_NOISE
+  // Shot + read noise per pixel and channel, seeded by the frame and the
+  // pixel: sigma^2 = read^2 + shot * level. Four uniform hashes summed are
+  // close enough to a Gaussian (Irwin-Hall, variance 1/3 -> scaled to 1).
+  uvec2 pixel = uvec2(gl_FragCoord.xy);
+  uint h = Mix(pixel.x * kHashX ^ pixel.y * kHashY ^ u_noise_seed * 0x27d4eb2fu);
+  vec3 gauss = vec3(0.0);
+  for (int i = 0; i < 4; ++i) {
+    h = Mix(h + uint(i));
+    gauss += vec3(uvec3(h, h >> 10, h >> 20) & 1023u) / 1023.0;
+  }
+  gauss = (gauss - 2.0) * 1.7320508;
+  c += gauss * sqrt(u_noise.x * u_noise.x + u_noise.y * c);
+#endif
+  return vec4(c, 1.0);
 }
 
 // Compiled in only with shadows (SIM4CV_SHADOWS): llvmpipe would sample

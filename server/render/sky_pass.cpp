@@ -18,7 +18,10 @@ void main() {
 }
 )";
 
+// Sensor noise is compiled in: with u_noise 0 it adds nothing, and the sky
+// is a few pixels of most frames.
 constexpr const char* kFragmentHeader = R"(#version 330 core
+#define SIM4CV_SENSOR_NOISE
 in vec2 v_clip;
 uniform mat4 u_world_from_clip;
 uniform vec3 u_to_light;
@@ -48,13 +51,13 @@ SkyPass::SkyPass() {
 SkyPass::~SkyPass() { glDeleteProgram(program_); }
 
 void SkyPass::Draw(GLuint rgb_attachment, const Eigen::Matrix4f& clip_from_world,
-                   const Eigen::Vector3f& camera_position, const Look& look) const {
+                   const Eigen::Vector3f& camera_position, const Look& look, uint32_t noise_seed) const {
   const GLenum buffer = GL_COLOR_ATTACHMENT0 + rgb_attachment;
   glDrawBuffers(1, &buffer);
   glUseProgram(program_);
   const Eigen::Matrix4f world_from_clip = clip_from_world.inverse();
   glUniformMatrix4fv(u_world_from_clip_, 1, GL_FALSE, world_from_clip.data());
-  look_.Apply(look, camera_position, ShadowSampling{});
+  look_.Apply(look, camera_position, ShadowSampling{}, noise_seed);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LEQUAL);  // only where the depth buffer still holds the clear value
   glDepthMask(GL_FALSE);

@@ -25,7 +25,7 @@ class SkyPass {
   // whose depth buffer holds the scene. clip_from_world: the scene's
   // projection times view. Leaves the draw buffers set to that attachment alone.
   void Draw(GLuint rgb_attachment, const Eigen::Matrix4f& clip_from_world, const Eigen::Vector3f& camera_position,
-            const Look& look) const;
+            const Look& look, uint32_t noise_seed) const;
 
  private:
   GLuint program_ = 0;

@@ -183,6 +183,8 @@ std::string CheckSetConditions(const proto::SetConditions& request) {
     return "SetConditions.preset " + Quoted(request.preset()) + " is not a preset; use one of " + conditions::Names();
   });
   if (request.has_hour()) check.Range("SetConditions.hour", request.hour(), conditions::kMinHour, conditions::kMaxHour);
+  if (request.has_noise_read()) check.Range("SetConditions.noise_read", request.noise_read(), 0, conditions::kMaxNoiseRead);
+  if (request.has_noise_shot()) check.Range("SetConditions.noise_shot", request.noise_shot(), 0, conditions::kMaxNoiseShot);
   check.True(request.quality().empty() || conditions::FindQuality(request.quality()).has_value(), [&] {
     return "SetConditions.quality " + Quoted(request.quality()) + " is not a quality; use \"full\" or \"fast\"";
   });

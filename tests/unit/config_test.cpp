@@ -187,6 +187,14 @@ TEST(ConfigTest, ConditionsFlags) {
   ExpectMentions(ParseError({"--hour", "25"}), {"--hour is 25", "[0, 24]"});
   ExpectMentions(ParseError({"--hour", "-1"}), {"--hour"});
   ExpectMentions(ParseError({"--quality", "medium"}), {"--quality 'medium' is not a quality", "full or fast"});
+  const Config noisy = Parse({"--noise-read", "2.5", "--noise-shot", "1", "--randomize", "9", "--randomize-every", "30"});
+  EXPECT_EQ(noisy.conditions.noise_read, 2.5);
+  EXPECT_EQ(noisy.conditions.noise_shot, 1.0);
+  EXPECT_EQ(noisy.randomize_seed, 9u);
+  EXPECT_EQ(noisy.randomize_every_frames, 30u);
+  ExpectMentions(ParseError({"--noise-read", "60"}), {"--noise-read is 60", "[0, 50]"});
+  ExpectMentions(ParseError({"--noise-shot", "-1"}), {"--noise-shot"});
+  ExpectMentions(ParseError({"--randomize-every", "5"}), {"--randomize-every needs --randomize SEED"});
 }
 
 TEST(ConfigTest, UnknownFlagIsNamed) {

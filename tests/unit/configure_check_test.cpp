@@ -55,6 +55,15 @@ TEST(ConfigureCheckTest, ConditionsAreNamedWithTheValidChoices) {
   request.mutable_set_conditions()->set_hour(std::nan(""));
   ExpectProblem(request, "SetConditions.hour is nan");
   request.mutable_set_conditions()->clear_hour();
+  request.mutable_set_conditions()->set_noise_read(51);
+  ExpectProblem(request, "SetConditions.noise_read is 51; it must be a finite number in [0, 50]");
+  request.mutable_set_conditions()->clear_noise_read();
+  request.mutable_set_conditions()->set_noise_shot(std::nan(""));
+  ExpectProblem(request, "SetConditions.noise_shot is nan");
+  request.mutable_set_conditions()->clear_noise_shot();
+  request.mutable_set_conditions()->set_randomize_every_frames(10);
+  ExpectProblem(request, "SetConditions.randomize_every_frames is 10 without a randomize_seed");
+  request.mutable_set_conditions()->set_randomize_every_frames(0);
   request.mutable_set_conditions()->set_quality("ultra");
   ExpectProblem(request, "SetConditions.quality 'ultra' is not a quality");
 }

@@ -47,8 +47,8 @@ TEST(ConditionsTest, PresetsAreListedOnceAndFoundByName) {
 TEST(ConditionsTest, RandomisationIsReproducibleFromItsSeedAndCoversThePresets) {
   std::set<Preset> seen;
   for (uint64_t draw = 0; draw < 60; ++draw) {
-    const conditions::Conditions a = conditions::Randomized(42, draw, Quality::kFull);
-    const conditions::Conditions b = conditions::Randomized(42, draw, Quality::kFull);
+    const conditions::Conditions a = conditions::Randomized(42, draw, conditions::Conditions{});
+    const conditions::Conditions b = conditions::Randomized(42, draw, conditions::Conditions{});
     EXPECT_EQ(a.preset, b.preset);
     EXPECT_EQ(a.hour, b.hour);
     EXPECT_EQ(a.exposure, b.exposure);
@@ -63,8 +63,8 @@ TEST(ConditionsTest, RandomisationIsReproducibleFromItsSeedAndCoversThePresets) 
     seen.insert(a.preset);
   }
   EXPECT_EQ(seen.size(), conditions::kPresets.size()) << "60 draws reach every preset";
-  EXPECT_NE(conditions::Randomized(42, 0, Quality::kFull).variation, conditions::Randomized(43, 0, Quality::kFull).variation);
-  EXPECT_EQ(conditions::Randomized(42, 0, Quality::kFast).quality, Quality::kFast);
+  EXPECT_NE(conditions::Randomized(42, 0, conditions::Conditions{}).variation, conditions::Randomized(43, 0, conditions::Conditions{}).variation);
+  EXPECT_EQ(conditions::Randomized(42, 0, conditions::Of(Preset::FOG, Quality::kFast)).quality, Quality::kFast);
 }
 
 TEST(LookTest, TheSunRisesInTheEastStandsSouthAtNoonAndSetsInTheWest) {
@@ -187,7 +187,7 @@ TEST_F(LookRenderTest, GroundTruthIsByteIdenticalInEveryPresetAndQuality) {
     std::vector<conditions::Conditions> all;
     for (const conditions::PresetInfo& info : conditions::kPresets) all.push_back(conditions::Of(info.preset));
     all.push_back({Preset::CLEAR_NOON, 7.0, Quality::kFull});
-    all.push_back(conditions::Randomized(9, 3, Quality::kFull));  // exposure and a colour jitter per object
+    all.push_back(conditions::Randomized(9, 3, conditions::Conditions{}));  // exposure and a colour jitter per object
     for (const conditions::Conditions& look : all) {
       SCOPED_TRACE(conditions::Describe(look));
       const Shot shot = Render(camera, look);
@@ -200,6 +200,46 @@ TEST_F(LookRenderTest, GroundTruthIsByteIdenticalInEveryPresetAndQuality) {
       EXPECT_FALSE(SameBytes(shot.frame.rgb, reference.frame.rgb)) << "the full look differs from the fast one";
     }
   }
+}
+
+TEST_F(LookRenderTest, SensorNoiseIsUnbiasedOfTheAskedSizeAndRepeatsPerSeed) {
+  conditions::Conditions noisy = conditions::Of(Preset::OVERCAST);
+  const Shot clean = Render(0, noisy);
+  noisy.noise_read = 4.0;
+  noisy.noise_shot = 0.0;
+  const Shot first = Render(0, noisy);
+  const Shot again = Render(0, noisy);
+  EXPECT_TRUE(SameBytes(first.frame.rgb, again.frame.rgb)) << "the same seed (frame and camera) repeats";
+  double sum = 0, sum2 = 0;
+  for (std::size_t i = 0; i < clean.frame.rgb.size(); ++i) {
+    const double d = static_cast<double>(first.frame.rgb[i]) - clean.frame.rgb[i];
+    sum += d;
+    sum2 += d * d;
+  }
+  const double n = static_cast<double>(clean.frame.rgb.size());
+  EXPECT_LT(std::abs(sum / n), 0.3) << "unbiased";
+  EXPECT_NEAR(std::sqrt(sum2 / n), 4.0, 0.6) << "read noise of 4 levels";
+  EXPECT_TRUE(SameBytes(first.frame.depth, clean.frame.depth));
+  EXPECT_TRUE(SameBytes(first.frame.mask, clean.frame.mask));
+  // Shot noise grows with the level: bright pixels scatter more than dark ones.
+  noisy.noise_read = 0.0;
+  noisy.noise_shot = 2.0;
+  const Shot shot = Render(0, noisy);
+  double dark = 0, bright = 0;
+  int dark_n = 0, bright_n = 0;
+  for (std::size_t i = 0; i < clean.frame.rgb.size(); ++i) {
+    const double d = static_cast<double>(shot.frame.rgb[i]) - clean.frame.rgb[i];
+    if (clean.frame.rgb[i] < 100) {
+      dark += d * d;
+      ++dark_n;
+    } else if (clean.frame.rgb[i] > 170) {
+      bright += d * d;
+      ++bright_n;
+    }
+  }
+  ASSERT_GT(dark_n, 100);
+  ASSERT_GT(bright_n, 100);
+  EXPECT_GT(bright / bright_n, 2.0 * dark / dark_n);
 }
 
 TEST_F(LookRenderTest, EveryPresetRendersTheSameRgbEveryTime) {

@@ -95,14 +95,14 @@ TEST_F(SimulationTest, RandomisationDrawsPerEpisodeOrEveryNFramesFromItsSeed) {
   const auto same = [](const conditions::Conditions& a, const conditions::Conditions& b) {
     return a.preset == b.preset && a.hour == b.hour && a.exposure == b.exposure && a.variation == b.variation;
   };
-  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 0, conditions::Quality::kFull)));
+  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 0, conditions::Conditions{})));
   EXPECT_FALSE(sim.AdvanceConditions()) << "per episode: frames do not draw";
   proto::Configure reset;
   reset.mutable_reset();
   EXPECT_TRUE(sim.Apply(reset, answer_).new_conditions);
-  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 1, conditions::Quality::kFull)));
+  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 1, conditions::Conditions{})));
   EXPECT_EQ(answer_.world().conditions().randomize_seed(), 11u);
-  EXPECT_EQ(answer_.world().conditions().variation(), conditions::Randomized(11, 1, conditions::Quality::kFull).variation);
+  EXPECT_EQ(answer_.world().conditions().variation(), conditions::Randomized(11, 1, conditions::Conditions{}).variation);
 
   // Every 5 frames, through SetConditions.
   proto::Configure every;
@@ -113,7 +113,7 @@ TEST_F(SimulationTest, RandomisationDrawsPerEpisodeOrEveryNFramesFromItsSeed) {
   EXPECT_FALSE(sim.AdvanceConditions());
   sim.state().frame_id = 10;
   EXPECT_TRUE(sim.AdvanceConditions());
-  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 2, conditions::Quality::kFull)));
+  EXPECT_TRUE(same(sim.conditions(), conditions::Randomized(11, 2, conditions::Conditions{})));
   // An explicit preset stops it.
   proto::Configure fixed;
   fixed.mutable_set_conditions()->set_preset("fog");
