@@ -6,7 +6,7 @@
 //   3. frames rendered per second (RGB + depth + mask read back, boxes) from the UAV camera,
 //      then each further channel's added cost (protocol/channels.h), and RGB alone.
 //   4. the cost of the look (look.h): rgb+depth+mask with --quality fast, then full without
-//      shadows, then full (the default), in the conditions asked for.
+//      shadows, then full (the default), then full with sensor noise, in the conditions asked for.
 //   sim4cv_bench_sim_render [--map FILE] [--width W] [--height H] [--steps N] [--frames N]
 //                           [--traffic-cars N] [--traffic-parked N] [--traffic-pedestrians N] [--traffic-lights on|off]
 //                           [--conditions PRESET] [--quality full|fast]
@@ -55,16 +55,15 @@ double CarAndFourUavsRealTimeFactor(const sim::Scene& scene, int steps) {
 constexpr channels::ChannelSet kBaseChannels =
     channels::Bit(proto::CHANNEL_RGB) | channels::Bit(proto::CHANNEL_DEPTH) | channels::Bit(proto::CHANNEL_MASK);
 
-// Times `frames` frames of the scene's first camera, the world stepping as at
-// 30 Hz between them, rendering the pixel channels of a set (boxes whenever
-// the set has MASK), read back as the daemon does.
+// Times the frames of the scene's first camera at `states` (the world stepped
+// as at 30 Hz, recorded once, so every Run renders the same frames and runs
+// compare), rendering the pixel channels of a set (boxes whenever the set
+// has MASK), read back as the daemon does.
 struct RenderTimer {
-  sim::World& world;
-  sim::State& state;
+  const std::vector<sim::State>& states;
   render::SceneGraphics& graphics;
   render::Renderer& renderer;
   uint32_t width, height;
-  int frames;
 
   bench::Summary Run(channels::ChannelSet set) {
     std::array<std::vector<uint8_t>, channels::kPixelChannelCount> planes;
@@ -80,11 +79,10 @@ struct RenderTimer {
     std::vector<render::GroundTruthBox> found;
     render::BoxExtractor extractor;
     std::vector<double> frame_ms;
-    frame_ms.reserve(static_cast<std::size_t>(frames));
+    frame_ms.reserve(states.size());
     const sim::CameraSpec& camera = scene_camera;
-    render::CameraView previous = graphics.CameraAt(camera, state);
-    for (int i = 0; i < frames; ++i) {
-      for (int s = 0; s < 8; ++s) world.Step(state, kDt);  // the scene moves as it does at 30 Hz
+    render::CameraView previous = graphics.CameraAt(camera, states.front());
+    for (const sim::State& state : states) {
       const auto start = Clock::now();
       graphics.Update(state);
       render::CameraView view = graphics.CameraAt(camera, state);
@@ -150,7 +148,13 @@ int main(int argc, char** argv) {
   const render::Look look = render::LookOf(look_conditions);
   renderer.SetLook(look);
   std::printf("render: conditions %s\n", conditions::Describe(look_conditions).c_str());
-  RenderTimer timer{world, state, graphics, renderer, width, height, frames, scene.cameras[0]};
+  std::vector<sim::State> states;
+  states.reserve(static_cast<std::size_t>(frames));
+  for (int i = 0; i < frames; ++i) {
+    for (int s = 0; s < 8; ++s) world.Step(state, kDt);  // the scene moves as it does at 30 Hz
+    states.push_back(state);
+  }
+  RenderTimer timer{states, graphics, renderer, width, height, scene.cameras[0]};
   const bench::Summary base = timer.Run(kBaseChannels);
   std::printf("render: %d frames (rgb,depth,mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: "
               "%.0f fps\n",
@@ -173,8 +177,11 @@ int main(int argc, char** argv) {
   unshadowed.shadows = false;
   render::Look full = look;
   full.full = true;
+  render::Look noisy = full;
+  noisy.noise_read = 3.0f;
+  noisy.noise_shot = 1.5f;
   for (const auto& [name, variant] : {std::pair{"fast", fast}, std::pair{"full, no shadows", unshadowed},
-                                      std::pair{"full", full}}) {
+                                      std::pair{"full", full}, std::pair{"full + noise", noisy}}) {
     renderer.SetLook(variant);
     const bench::Summary timed = timer.Run(kBaseChannels);
     std::printf("look: %-16s rgb,depth,mask median %.3f ms, p99 %.3f ms\n", name, timed.median, timed.p99);

@@ -53,6 +53,9 @@ struct DrawItem {
   // The same item's transform one frame earlier (for optical flow); equal to
   // world_from_model for what does not move or did not exist.
   Eigen::Matrix4f previous_world_from_model = Eigen::Matrix4f::Identity();
+  // Never moves while the scene lasts (map objects, buildings): its shadow may
+  // be drawn once and reused (shadow_map.h). False is always safe.
+  bool fixed = false;
 };
 
 // A pinhole camera. The camera frame follows OpenGL: x right, y up, looking

@@ -280,15 +280,26 @@ ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<c
   if (!shadow_map) shadow_map = std::make_unique<ShadowMap>(kShadowMapSize, kShadowRadiusM);
   const Eigen::Matrix4f clip_from_world = shadow_map->Fit(camera, look.to_sun);
   const auto planes = FrustumPlanes(clip_from_world);
-  shadow_map->Begin(clip_from_world);
   const GLint u_model = shadow_map->ModelLocation();
-  for (const DrawItem& item : items) {
-    if (item.mesh >= meshes.size() || !meshes[item.mesh].casts_shadow || !InFrustum(item, planes)) continue;
-    const MeshRange& mesh = meshes[item.mesh];
-    glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
-    glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT,
-                   reinterpret_cast<const void*>(mesh.first_index * sizeof(uint32_t)));
+  // Fixed casters only when the map moved or the sun turned; moving ones every frame.
+  const auto draw_casters = [&](bool fixed) {
+    for (const DrawItem& item : items) {
+      if (item.fixed != fixed || item.mesh >= meshes.size() || !meshes[item.mesh].casts_shadow ||
+          !InFrustum(item, planes)) {
+        continue;
+      }
+      const MeshRange& mesh = meshes[item.mesh];
+      glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
+      glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(mesh.first_index * sizeof(uint32_t)));
+    }
+  };
+  if (!shadow_map->FixedCastersCached(clip_from_world)) {
+    shadow_map->BeginFixed(clip_from_world);
+    draw_casters(true);
   }
+  shadow_map->BeginMoving(clip_from_world);
+  draw_casters(false);
   return shadow_map->End(clip_from_world);
 }
 

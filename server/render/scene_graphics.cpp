@@ -84,7 +84,10 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
                                           vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh, add_item);
   }
   static_item_count_ = items_.size();
-  for (DrawItem& item : items_) item.previous_world_from_model = item.world_from_model;  // they never move
+  for (DrawItem& item : items_) {
+    item.previous_world_from_model = item.world_from_model;  // they never move
+    item.fixed = true;
+  }
   const Eigen::Vector3f car_size = 2.0f * scene.car.params.chassis_half_extents.cast<float>();
   // The scene's target car is red, as in the paper; other cars are blue.
   meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.80f, 0.10f, 0.10f}));

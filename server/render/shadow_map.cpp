@@ -22,27 +22,36 @@ void main() {}
 // Sun-space depth kept around the fitted square: casters up to this far
 // towards the sun (tall buildings, UAVs) still cast.
 constexpr float kDepthRangeM = 400.0f;
+// The map's centre moves in steps this long (in the sun's frame): the fixed
+// casters are redrawn about once per kSnapM the camera travels.
+constexpr float kSnapM = 4.0f;
 
-}  // namespace
-
-ShadowMap::ShadowMap(GLsizei size, float radius_m) : size_(size), radius_m_(radius_m) {
-  glGenTextures(1, &texture_);
-  glBindTexture(GL_TEXTURE_2D, texture_);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, size_, size_, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+// A depth texture with a framebuffer that draws only into it.
+void MakeDepthTarget(GLsizei size, GLuint& texture, GLuint& framebuffer) {
+  glGenTextures(1, &texture);
+  glBindTexture(GL_TEXTURE_2D, texture);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, size, size, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // linear (2x2 PCF) costs +0.5 ms a frame
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
-  glGenFramebuffers(1, &framebuffer_);
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, texture_, 0);
+  glGenFramebuffers(1, &framebuffer);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, texture, 0);
   glDrawBuffer(GL_NONE);
   glReadBuffer(GL_NONE);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
     throw std::runtime_error("shadow map framebuffer is incomplete");
   }
+}
+
+}  // namespace
+
+ShadowMap::ShadowMap(GLsizei size, float radius_m) : size_(size), radius_m_(radius_m) {
+  MakeDepthTarget(size_, texture_, framebuffer_);
+  MakeDepthTarget(size_, fixed_texture_, fixed_framebuffer_);
   program_ = LinkProgram(kVertexShader, kFragmentShader);
   u_model_ = RequireUniform(program_, "u_model");
   u_clip_from_world_ = RequireUniform(program_, "u_clip_from_world");
@@ -51,6 +60,8 @@ ShadowMap::ShadowMap(GLsizei size, float radius_m) : size_(size), radius_m_(radi
 
 ShadowMap::~ShadowMap() {
   glDeleteProgram(program_);
+  glDeleteFramebuffers(1, &fixed_framebuffer_);
+  glDeleteTextures(1, &fixed_texture_);
   glDeleteFramebuffers(1, &framebuffer_);
   glDeleteTextures(1, &texture_);
 }
@@ -74,11 +85,12 @@ Eigen::Matrix4f ShadowMap::Fit(const CameraView& camera, const Eigen::Vector3f& 
   sun_from_world.block<1, 3>(0, 0) = x.transpose();
   sun_from_world.block<1, 3>(1, 0) = y.transpose();
   sun_from_world.block<1, 3>(2, 0) = z.transpose();
-  // Snap the centre to whole texels in the sun's frame.
+  // Snap the centre to steps of kSnapM (whole texels) in the sun's frame.
   const float texel_m = 2.0f * radius_m_ / static_cast<float>(size_);
-  Eigen::Vector3f snapped(x.dot(centre), y.dot(centre), z.dot(centre));
-  snapped.x() = std::round(snapped.x() / texel_m) * texel_m;
-  snapped.y() = std::round(snapped.y() / texel_m) * texel_m;
+  const float step_m = std::round(kSnapM / texel_m) * texel_m;
+  Eigen::Vector3f snapped(x.dot(centre), y.dot(centre), 0.0f);
+  snapped.x() = std::round(snapped.x() / step_m) * step_m;
+  snapped.y() = std::round(snapped.y() / step_m) * step_m;
   sun_from_world.block<3, 1>(0, 3) = -snapped;
   Eigen::Matrix4f ortho = Eigen::Matrix4f::Identity();
   ortho(0, 0) = 1.0f / radius_m_;
@@ -87,8 +99,12 @@ Eigen::Matrix4f ShadowMap::Fit(const CameraView& camera, const Eigen::Vector3f& 
   return ortho * sun_from_world;
 }
 
-void ShadowMap::Begin(const Eigen::Matrix4f& clip_from_world) const {
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+bool ShadowMap::FixedCastersCached(const Eigen::Matrix4f& clip_from_world) const {
+  return fixed_valid_ && fixed_clip_from_world_ == clip_from_world;
+}
+
+void ShadowMap::Bind(GLuint framebuffer, const Eigen::Matrix4f& clip_from_world) const {
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
   glViewport(0, 0, size_, size_);
   glUseProgram(program_);
   glUniformMatrix4fv(u_clip_from_world_, 1, GL_FALSE, clip_from_world.data());
@@ -99,7 +115,18 @@ void ShadowMap::Begin(const Eigen::Matrix4f& clip_from_world) const {
   glDisable(GL_CULL_FACE);  // open meshes (ground, signs) cast from both sides
   glEnable(GL_POLYGON_OFFSET_FILL);
   glPolygonOffset(1.5f, 2.0f);  // against self-shadowing stripes
+}
+
+void ShadowMap::BeginFixed(const Eigen::Matrix4f& clip_from_world) {
+  Bind(fixed_framebuffer_, clip_from_world);
   glClear(GL_DEPTH_BUFFER_BIT);
+  fixed_valid_ = true;
+  fixed_clip_from_world_ = clip_from_world;
+}
+
+void ShadowMap::BeginMoving(const Eigen::Matrix4f& clip_from_world) const {
+  glCopyImageSubData(fixed_texture_, GL_TEXTURE_2D, 0, 0, 0, 0, texture_, GL_TEXTURE_2D, 0, 0, 0, 0, size_, size_, 1);
+  Bind(framebuffer_, clip_from_world);
 }
 
 ShadowSampling ShadowMap::End(const Eigen::Matrix4f& clip_from_world) const {

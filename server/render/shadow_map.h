@@ -1,7 +1,9 @@
 // A depth map of the scene seen from the sun, for the RGB channel's shadows.
 // One orthographic map fitted to the ground the camera looks at, moved in
-// whole texels so shadow edges do not crawl as the camera moves.
-// Needs a current GL context; owns its texture, framebuffer and program.
+// steps of kSnapM so shadow edges do not crawl as the camera moves and the
+// fixed casters' depth (most of the geometry) is drawn only when the map
+// moves or the sun turns; each frame copies it and adds the moving casters.
+// Needs a current GL context; owns its textures, framebuffers and program.
 #pragma once
 
 #define GL_GLEXT_PROTOTYPES
@@ -27,18 +29,28 @@ class ShadowMap {
   // camera looks at, snapped to whole texels.
   Eigen::Matrix4f Fit(const CameraView& camera, const Eigen::Vector3f& to_sun) const;
 
-  // Binds the map's framebuffer and depth-only program and clears it; the
-  // caller draws the casters with ModelLocation() set per item, then End().
-  void Begin(const Eigen::Matrix4f& clip_from_world) const;
+  // Whether the fixed casters' depth drawn last is for `clip_from_world`.
+  bool FixedCastersCached(const Eigen::Matrix4f& clip_from_world) const;
+  // Binds the fixed casters' framebuffer and depth-only program and clears
+  // it; the caller draws them with ModelLocation() set per item.
+  void BeginFixed(const Eigen::Matrix4f& clip_from_world);
+  // Copies the fixed casters' depth into the map and binds it for the
+  // moving casters, drawn the same way; then End().
+  void BeginMoving(const Eigen::Matrix4f& clip_from_world) const;
   GLint ModelLocation() const { return u_model_; }
   // How the RGB pass samples what was drawn.
   ShadowSampling End(const Eigen::Matrix4f& clip_from_world) const;
 
  private:
+  void Bind(GLuint framebuffer, const Eigen::Matrix4f& clip_from_world) const;
+
   GLsizei size_;
   float radius_m_;
   GLuint texture_ = 0, framebuffer_ = 0, program_ = 0;
+  GLuint fixed_texture_ = 0, fixed_framebuffer_ = 0;
   GLint u_model_ = -1, u_clip_from_world_ = -1;
+  bool fixed_valid_ = false;
+  Eigen::Matrix4f fixed_clip_from_world_ = Eigen::Matrix4f::Zero();
 };
 
 }  // namespace sim4cv::render

@@ -252,6 +252,29 @@ TEST_F(LookRenderTest, EveryPresetRendersTheSameRgbEveryTime) {
   }
 }
 
+// The fixed casters' shadow depth is drawn once and reused while the map
+// stays put: a moving car's shadow must still follow it, exactly as a
+// renderer that never drew anything before would draw it.
+TEST_F(LookRenderTest, CachedShadowsOfFixedCastersAgreeWithAFreshRenderer) {
+  const conditions::Conditions morning = conditions::Of(Preset::CLEAR_MORNING);
+  Render(0, morning);  // primes the cache for the UAV's view
+  sim::State later = *state_;
+  sim::Entity& car = later.entities.front();
+  car.body.position += Eigen::Vector3d(0.6, 0.4, 0.0);  // the UAV (and its view) stays
+  graphics_->Update(later);
+  const Shot warm = Render(0, morning);
+  Renderer fresh(graphics_->meshes(), kWidth, kHeight);
+  fresh.SetLook(LookOf(morning));
+  CameraView view = graphics_->CameraAt(scene_->cameras[0], later);
+  view.previous_world_from_camera = view.world_from_camera;
+  view.previous_world_from_camera(0, 3) -= 0.3f;
+  Shot cold;
+  cold.unoccluded.assign(graphics_->instance_id_bound(), 0);
+  fresh.Render(view, graphics_->draw_items(), cold.frame.Buffers(channels::kAllPixels), cold.unoccluded);
+  graphics_->Update(*state_);
+  EXPECT_TRUE(SameBytes(warm.frame.rgb, cold.frame.rgb));
+}
+
 TEST_F(LookRenderTest, NightIsDarkerThanDuskAndDuskThanNoonAndRainDarkensTheRoad) {
   const std::size_t chase = 2;  // car_chase: road, sidewalks, houses and sky
   ASSERT_EQ(scene_->cameras[chase].name, "car_chase");
