@@ -141,6 +141,7 @@ int main(int argc, char** argv) {
   gl->MakeCurrent();
   render::SceneGraphics graphics(scene);
   render::Renderer renderer(graphics.meshes(), width, height);
+  renderer.SetLamps(graphics.lamps());
   std::size_t triangles = 0;
   for (const auto& mesh : graphics.meshes()) triangles += mesh.indices.size() / 3;
   std::printf("render: %ux%u, %zu triangles in the scene, renderer %s\n", width, height, triangles,

@@ -64,6 +64,7 @@ int main(int argc, char** argv) try {
   render::SceneGraphics graphics(scene);
   graphics.Update(state);
   render::Renderer renderer(graphics.meshes(), width, height);
+  renderer.SetLamps(graphics.lamps());
   std::vector<uint8_t> rgb(std::size_t{width} * height * 3);
   render::FrameBuffers buffers{};
   buffers[*channels::IndexOf(proto::CHANNEL_RGB)] = rgb.data();

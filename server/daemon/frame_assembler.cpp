@@ -35,6 +35,7 @@ void FrameAssembler::Build(const sim::Scene& scene, const std::vector<sim::Camer
   auto graphics = std::make_unique<render::SceneGraphics>(scene);
   auto renderer = std::make_unique<render::Renderer>(graphics->meshes(), width, height);
   renderer->SetLook(look_);
+  renderer->SetLamps(graphics->lamps());
   std::vector<uint32_t> unoccluded(graphics->instance_id_bound(), 0);
   // Nothing below throws; the old renderer dies before the meshes it drew.
   renderer_ = std::move(renderer);

@@ -61,6 +61,7 @@ std::string FragmentShader(PlaneSet planes, uint32_t look) {
   std::string declarations = kFragmentInputs;
   const std::size_t after_version = declarations.find('\n') + 1;
   if (look & ChannelProgram::kNoise) declarations.insert(after_version, "#define SIM4CV_SENSOR_NOISE\n");
+  if (look & ChannelProgram::kLamps) declarations.insert(after_version, "#define SIM4CV_LAMPS\n");
   if (look & ChannelProgram::kShadows) declarations.insert(after_version, "#define SIM4CV_SHADOWS\n");
   if (look & ChannelProgram::kFull) declarations.insert(after_version, "#define SIM4CV_FULL_LOOK\n");
   std::string body = "void main() {\n";
@@ -91,6 +92,8 @@ ChannelProgram::ChannelProgram(PlaneSet planes, uint32_t look) : planes_(planes)
   u_previous_view_projection = locate("u_previous_view_projection");
   u_viewport = locate("u_viewport");
   this->look.Locate(program_);
+  u_lamps = locate("u_lamps");
+  u_lamp_count = locate("u_lamp_count");
 }
 
 ChannelProgram::~ChannelProgram() { glDeleteProgram(program_); }

@@ -19,9 +19,9 @@ class ChannelProgram {
  public:
   // How RGB is drawn, as compile-time switches of the GLSL (llvmpipe would
   // pay for a uniform branch's untaken side): the full look (else the
-  // fast one), and in the full look sun shadows and sensor noise.
-  enum RgbLook : uint32_t { kFast = 0, kFull = 1, kShadows = 2, kNoise = 4 };
-  inline static constexpr uint32_t kRgbLooks = 8;  // every combination of the bits
+  // fast one), and in the full look sun shadows, sensor noise and lanterns.
+  enum RgbLook : uint32_t { kFast = 0, kFull = 1, kShadows = 2, kNoise = 4, kLamps = 8 };
+  inline static constexpr uint32_t kRgbLooks = 16;  // every combination of the bits
   ChannelProgram(PlaneSet planes, uint32_t look);
   ~ChannelProgram();
   ChannelProgram(const ChannelProgram&) = delete;
@@ -35,6 +35,7 @@ class ChannelProgram {
   GLint u_model = -1, u_view = -1, u_projection = -1, u_normal_matrix = -1, u_instance = -1, u_to_light = -1;
   GLint u_previous_model = -1, u_previous_view_projection = -1, u_viewport = -1;
   LookUniforms look;  // those of shading.h, where a channel (RGB) uses them
+  GLint u_lamps = -1, u_lamp_count = -1;
 
  private:
   PlaneSet planes_ = 0;

@@ -184,4 +184,8 @@ Mesh MakeObjectMesh(map::ObjectKind kind, map::Surroundings surroundings, uint32
   return {};
 }
 
+Vector3f LanternLightOffset() {
+  return {0.0f, 1.1f, static_cast<float>(map::ShapeOf(ObjectKind::kLantern).height) - 0.25f};
+}
+
 }  // namespace sim4cv::render

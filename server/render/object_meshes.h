@@ -2,6 +2,8 @@
 // and physics agree: houses, trees, lanterns, parks, obstacles.
 #pragma once
 
+#include <Eigen/Core>
+
 #include <cstdint>
 
 #include "server/render/render_types.h"
@@ -14,5 +16,8 @@ namespace sim4cv::render {
 // z and moves it). `variant` picks colours, so neighbouring houses differ;
 // the same arguments always give the same mesh. At most 110 triangles.
 Mesh MakeObjectMesh(map::ObjectKind kind, map::Surroundings surroundings, uint32_t variant);
+
+// Where a lantern's light comes from, in its model frame: just under its head.
+Eigen::Vector3f LanternLightOffset();
 
 }  // namespace sim4cv::render

@@ -101,6 +101,11 @@ struct Renderer::Impl {
   std::vector<GLuint> queries;  // grows to the most instances seen in a frame
 
   Look look = LookOf(conditions::Conditions{});
+  std::vector<Eigen::Vector3f> lamps;
+  std::vector<std::pair<float, uint32_t>> lamp_order;  // scratch: distance², index
+  std::array<Eigen::Vector3f, kMaxLamps> nearest_lamps;
+  // Fills nearest_lamps with the lamps nearest `point`; how many.
+  int NearestLamps(const Eigen::Vector3f& point);
   // Made the first time the full look draws RGB (with shadows, for the map).
   std::unique_ptr<ShadowMap> shadow_map;
   std::unique_ptr<SkyPass> sky;
@@ -276,6 +281,15 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
   }
 }
 
+int Renderer::Impl::NearestLamps(const Eigen::Vector3f& point) {
+  lamp_order.clear();
+  for (uint32_t i = 0; i < lamps.size(); ++i) lamp_order.emplace_back((lamps[i] - point).squaredNorm(), i);
+  const auto count = static_cast<int>(std::min<std::size_t>(lamp_order.size(), kMaxLamps));
+  std::partial_sort(lamp_order.begin(), lamp_order.begin() + count, lamp_order.end());
+  for (int i = 0; i < count; ++i) nearest_lamps[static_cast<std::size_t>(i)] = lamps[lamp_order[static_cast<std::size_t>(i)].second];
+  return count;
+}
+
 ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<const DrawItem> items) {
   if (!shadow_map) shadow_map = std::make_unique<ShadowMap>(kShadowMapSize, kShadowRadiusM);
   const Eigen::Matrix4f clip_from_world = shadow_map->Fit(camera, look.to_sun);
@@ -372,6 +386,11 @@ Renderer::~Renderer() = default;
 
 void Renderer::SetLook(const Look& look) { impl_->look = look; }
 
+void Renderer::SetLamps(std::vector<Eigen::Vector3f> lamps) {
+  impl_->lamps = std::move(lamps);
+  impl_->lamp_order.reserve(impl_->lamps.size());  // no allocation per frame
+}
+
 void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
                       std::span<uint32_t> unoccluded_pixels) {
   Impl& gl = *impl_;
@@ -411,7 +430,8 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   uint32_t rgb_look = ChannelProgram::kFast;
   if (full_rgb) {
     rgb_look = ChannelProgram::kFull | (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
-               (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u);
+               (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u) |
+               (gl.look.lights > 0.0f && !gl.lamps.empty() ? ChannelProgram::kLamps : 0u);
   }
   gl.UsePlanes(planes, rgb_look);
   const ChannelProgram& program = *gl.program;
@@ -421,6 +441,12 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   glUniform3fv(program.u_to_light, 1, to_light.data());
   glUniform2fv(program.u_viewport, 1, viewport.data());
   if (full_rgb) program.look.Apply(gl.look, camera_position, shadow, camera.noise_seed);
+  if ((rgb_look & ChannelProgram::kLamps) != 0) {
+    const Eigen::Vector3f ahead = camera_position - 15.0f * camera.world_from_camera.block<3, 1>(0, 2);
+    const int count = gl.NearestLamps(ahead);
+    glUniform3fv(program.u_lamps, count, gl.nearest_lamps[0].data());
+    glUniform1i(program.u_lamp_count, count);
+  }
 
   gl.DrawScene(items, FrustumPlanes(projection * view), unoccluded_pixels);
   if (full_rgb) {

@@ -36,6 +36,11 @@ class Renderer {
   // How later frames' RGB is lit and shaded (look.h); the other channels
   // never depend on it. The default is LookOf(conditions::Conditions{}).
   void SetLook(const Look& look);
+  // The street lanterns (world positions) that light the full look's RGB
+  // when the look's lights are on: each frame the kMaxLamps nearest the
+  // point 15 m ahead of the camera (each lamp costs every pixel).
+  void SetLamps(std::vector<Eigen::Vector3f> lamps);
+  static constexpr int kMaxLamps = 4;
 
  private:
   struct Impl;

@@ -9,6 +9,7 @@
 #include "server/render/camera_math.h"
 #include "server/render/map_meshes.h"
 #include "server/render/mesh_builder.h"
+#include "server/render/object_meshes.h"
 #include "server/render/traffic_meshes.h"
 #include "server/session/entity_kinds_wire.h"
 #include "server/sim/vehicles/car.h"
@@ -48,6 +49,9 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     // Tile maps bring their own ground, roads and labelled dressing.
     for (auto& drawable :
          BuildMapDrawables(*scene.map, *scene.road_graph, static_cast<InstanceId>(sim::kFirstBuildingId))) {
+      if (drawable.object_class == proto::OBJECT_CLASS_LANTERN) {
+        lamps_.push_back((drawable.world_from_model * LanternLightOffset().homogeneous()).head<3>());
+      }
       add_static(std::move(drawable.mesh), drawable.instance, drawable.object_class, drawable.world_from_model);
     }
   } else {

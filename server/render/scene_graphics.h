@@ -31,6 +31,8 @@ class SceneGraphics {
 
   // Static items followed by the entities, as of the last Update.
   const std::vector<DrawItem>& draw_items() const { return items_; }
+  // Where the scene's street lanterns shine from (world), for Renderer::SetLamps.
+  const std::vector<Eigen::Vector3f>& lamps() const { return lamps_; }
   // Labelled objects (instance id, class) in instance-id order, as of the
   // last Update; the renderer fills in their unoccluded pixel counts.
   std::vector<LabelledObject>& labelled_objects() { return labelled_; }
@@ -59,6 +61,7 @@ class SceneGraphics {
   MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0, rotor_mesh_ = 0;
   MeshId pedestrian_mesh_ = 0, leg_mesh_ = 0, arm_mesh_ = 0;  // body and limbs
   float uav_span_ = 0.0f;
+  std::vector<Eigen::Vector3f> lamps_;
   std::vector<LabelledObject> static_labelled_;
   std::vector<LabelledObject> labelled_;
   std::vector<MovingObject> moving_;

@@ -22,6 +22,8 @@ uniform sampler2DShadow u_shadow_map;
 uniform uint u_variation;          // 0: none; else the seed of a colour jitter per object
 uniform vec2 u_noise;              // sensor noise: read sigma, shot gain, in [0, 1] units; 0, 0: none
 uniform uint u_noise_seed;         // per frame and camera
+uniform vec3 u_lamps[4];           // Renderer::kMaxLamps street lanterns nearest the view (world), with SIM4CV_LAMPS
+uniform int u_lamp_count;
 
 // Integer hashing: a few SIMD integer ops per value where a float hash
 // takes about twenty (llvmpipe pays per instruction).
@@ -217,7 +219,20 @@ vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic, float fog) {
   vec3 half_way = normalize(u_to_light + to_eye);
   // Blinn-Phong, with x^k as exp2(k (x - 1) / ln 2): one transcendental instead of pow's two.
   float highlight = exp2(s.shininess * 1.4427 * (max(dot(n, half_way), 0.0) - 1.0));
-  vec3 c = s.albedo * (ambient + u_sun * direct) + u_sun * (direct * s.specular * highlight) + s.emission;
+  vec3 light = ambient + u_sun * direct;
+#ifdef SIM4CV_LAMPS
+  // Street lanterns: warm point lights, inverse-square with a window that
+  // ends at 18 m (pools of light under each lantern), scaled by the look's
+  // night lights.
+  for (int i = 0; i < u_lamp_count; ++i) {
+    vec3 to_lamp = u_lamps[i] - p;
+    float d2 = dot(to_lamp, to_lamp);
+    float window = max(1.0 - d2 / 324.0, 0.0);
+    light += vec3(1.0, 0.78, 0.5) *
+             (20.0 * u_weather.z * max(dot(n, to_lamp), 0.0) * inversesqrt(d2) * window * window / (d2 + 1.0));
+  }
+#endif
+  vec3 c = s.albedo * light + u_sun * (direct * s.specular * highlight) + s.emission;
   // Schlick's Fresnel: the sky shows most at grazing angles.
   float grazing = 1.0 - max(dot(n, to_eye), 0.0);
   float grazing2 = grazing * grazing;

@@ -119,6 +119,7 @@ class LookRenderTest : public ::testing::Test {
     graphics_ = std::make_unique<SceneGraphics>(*scene_);
     graphics_->Update(*state_);
     renderer_ = std::make_unique<Renderer>(graphics_->meshes(), kWidth, kHeight);
+    renderer_->SetLamps(graphics_->lamps());
   }
   static void TearDownTestSuite() {
     renderer_.reset();
@@ -275,13 +276,31 @@ TEST_F(LookRenderTest, CachedShadowsOfFixedCastersAgreeWithAFreshRenderer) {
   EXPECT_TRUE(SameBytes(warm.frame.rgb, cold.frame.rgb));
 }
 
+TEST_F(LookRenderTest, StreetLanternsLightTheRoadAtNightOnly) {
+  ASSERT_GT(graphics_->lamps().size(), 8u) << "the urban map has lanterns";
+  const auto lit_against_unlit = [](const conditions::Conditions& conditions) {
+    const Shot lit = Render(1, conditions);  // car_front, with the lanterns
+    Renderer unlit(graphics_->meshes(), kWidth, kHeight);
+    unlit.SetLook(LookOf(conditions));
+    CameraView view = graphics_->CameraAt(scene_->cameras[1], *state_);
+    view.previous_world_from_camera = view.world_from_camera;
+    view.previous_world_from_camera(0, 3) -= 0.3f;
+    Shot dark;
+    unlit.Render(view, graphics_->draw_items(), dark.frame.Buffers(channels::kAllPixels), {});
+    EXPECT_TRUE(SameBytes(lit.frame.depth, dark.frame.depth));
+    return MeanLuma(lit.frame) - MeanLuma(dark.frame);
+  };
+  EXPECT_GT(lit_against_unlit(conditions::Of(Preset::NIGHT)), 1.0) << "pools of light on the road";
+  EXPECT_EQ(lit_against_unlit(conditions::Of(Preset::CLEAR_NOON)), 0.0) << "off by day";
+}
+
 TEST_F(LookRenderTest, NightIsDarkerThanDuskAndDuskThanNoonAndRainDarkensTheRoad) {
   const std::size_t chase = 2;  // car_chase: road, sidewalks, houses and sky
   ASSERT_EQ(scene_->cameras[chase].name, "car_chase");
   const Shot noon = Render(chase, conditions::Of(Preset::CLEAR_NOON));
   const Shot dusk = Render(chase, conditions::Of(Preset::DUSK));
   const Shot night = Render(chase, conditions::Of(Preset::NIGHT));
-  EXPECT_LT(MeanLuma(night.frame), 0.6 * MeanLuma(dusk.frame));
+  EXPECT_LT(MeanLuma(night.frame), 0.8 * MeanLuma(dusk.frame)) << "even with the lanterns lit";
   EXPECT_LT(MeanLuma(dusk.frame), MeanLuma(noon.frame));
   // The road seen from the UAV above it: wet asphalt is darker than the
   // same asphalt dry under the same sky.
