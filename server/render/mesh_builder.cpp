@@ -214,10 +214,12 @@ Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f&
   AppendBox(mesh, {0.5f * (rear + front), 0.0f, 0.5f * (roof_bottom + at(1.0f))},
             {0.5f * (front - rear) - 0.01f * length, 0.45f * width, 0.5f * (at(1.0f) - roof_bottom)}, color);
   const float lamp_z = at(profile.shoulder - 0.12f);
+  const std::size_t first_lamp = mesh.vertices.size();
   for (float y : {-0.33f * width, 0.33f * width}) {
     AppendBox(mesh, {0.5f * length - lamp_half.x(), y, lamp_z}, lamp_half, headlight);
     AppendBox(mesh, {-0.5f * length + lamp_half.x(), y, lamp_z}, lamp_half, taillight);
   }
+  MarkEmissive(mesh, first_lamp);  // lit at night
   return Labelled(std::move(mesh), SemanticClass::kCar);
 }
 
@@ -287,7 +289,9 @@ void AppendMesh(Mesh& into, const Mesh& part, const Eigen::Matrix4f& transform) 
     into.vertices.push_back({{position.x(), position.y(), position.z()},
                              {normal.x(), normal.y(), normal.z()},
                              {vertex.color[0], vertex.color[1], vertex.color[2]},
-                             vertex.semantic == 255 ? into.semantic : vertex.semantic});
+                             (vertex.semantic & kSemanticBits) == 255
+                                 ? (vertex.semantic & ~kSemanticBits) | into.semantic
+                                 : vertex.semantic});
   }
   for (size_t i = 0; i + 2 < part.indices.size(); i += 3) {
     into.indices.push_back(first + part.indices[i]);

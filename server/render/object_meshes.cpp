@@ -100,7 +100,9 @@ Mesh MakeLantern() {
   AddBox(mesh, {0, 0, 0.4f}, {static_cast<float>(shape.half_x), static_cast<float>(shape.half_y), 0.4f}, metal);
   AddBox(mesh, {0, 0, (top - 0.1f) / 2}, {0.08f, 0.08f, (top - 0.1f) / 2}, metal);
   AddBox(mesh, {0, 0.5f, top - 0.12f}, {0.05f, 0.45f, 0.05f}, metal);  // ends inside the head: no shared faces
+  const std::size_t head = mesh.vertices.size();
   AddBox(mesh, {0, 1.1f, top - 0.1f}, {0.15f, 0.3f, 0.1f}, lamp);
+  MarkEmissive(mesh, head);  // glows at night (its light: LanternLightOffset)
   return mesh;
 }
 

@@ -17,8 +17,15 @@ struct Vertex {
   float position[3];
   float normal[3];
   float color[3];  // linear RGB in [0, 1]
-  uint32_t semantic;  // SemanticClass (semantic_classes.h) of the surface, for CHANNEL_SEMANTIC
+  // Bits 0-7: the SemanticClass (semantic_classes.h) of the surface, for
+  // CHANNEL_SEMANTIC; kEmissive: the surface glows with its own colour when
+  // the look's night lights are on (lamps, headlights).
+  uint32_t semantic;
 };
+
+inline constexpr uint32_t kSemanticBits = 0xFF;
+inline constexpr uint32_t kEmissive = 0x100;
+
 
 // Indexed triangle list; front faces wind counter-clockwise seen from outside.
 struct Mesh {
@@ -33,9 +40,16 @@ struct Mesh {
 // Gives every vertex of `mesh` the class `semantic`, and makes it the class
 // of vertices appended later; returns the mesh, for use on a fresh one.
 inline Mesh Labelled(Mesh mesh, semantic::SemanticClass semantic) {
-  for (Vertex& vertex : mesh.vertices) vertex.semantic = static_cast<uint32_t>(semantic);
+  for (Vertex& vertex : mesh.vertices) {
+    vertex.semantic = (vertex.semantic & ~kSemanticBits) | static_cast<uint32_t>(semantic);  // keeps kEmissive
+  }
   mesh.semantic = static_cast<uint32_t>(semantic);
   return mesh;
+}
+
+// Sets kEmissive on the vertices of `mesh` from `first` on (a part just appended).
+inline void MarkEmissive(Mesh& mesh, std::size_t first) {
+  for (std::size_t i = first; i < mesh.vertices.size(); ++i) mesh.vertices[i].semantic |= kEmissive;
 }
 
 // Index into the mesh list the Renderer was built with.

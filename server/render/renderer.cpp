@@ -149,7 +149,7 @@ void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
   for (const Mesh& mesh : all_meshes) {
     MeshRange range = BoundingSphere(mesh);
     range.casts_shadow = std::any_of(mesh.vertices.begin(), mesh.vertices.end(),
-                                     [](const Vertex& v) { return !FlatGround(v.semantic); });
+                                     [](const Vertex& v) { return !FlatGround(v.semantic & kSemanticBits); });
     range.first_index = indices.size();
     range.index_count = static_cast<GLsizei>(mesh.indices.size());
     const auto base_vertex = static_cast<uint32_t>(vertices.size());

@@ -208,7 +208,8 @@ Surface Material(uint c, vec3 base, vec3 p, vec3 n, float distance) {
 
 // fog: 0 (none) .. 1 (only fog), interpolated from the vertices (the
 // vertex shader's v_fog: exp(-density * distance) is smooth enough).
-vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic, float fog) {
+vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic_and_flags, float fog) {
+  uint semantic = semantic_and_flags & 255u;
   vec3 n = normalize(world_normal);
   vec3 to_eye_full = u_camera_position - p;
   float distance = length(to_eye_full);
@@ -232,7 +233,9 @@ vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic, float fog) {
              (20.0 * u_weather.z * max(dot(n, to_lamp), 0.0) * inversesqrt(d2) * window * window / (d2 + 1.0));
   }
 #endif
-  vec3 c = s.albedo * light + u_sun * (direct * s.specular * highlight) + s.emission;
+  // Lamps and headlights (kEmissive) glow with their own colour at night.
+  vec3 glow = (semantic_and_flags & 256u) != 0u ? base * (4.0 * u_weather.z) : vec3(0.0);
+  vec3 c = s.albedo * light + u_sun * (direct * s.specular * highlight) + s.emission + glow;
   // Schlick's Fresnel: the sky shows most at grazing angles.
   float grazing = 1.0 - max(dot(n, to_eye), 0.0);
   float grazing2 = grazing * grazing;

@@ -96,7 +96,12 @@ TEST(MeshBuilder, EveryCarStyleFillsExactlyTheSameBounds) {
     ExpectWellFormed(car, 200);
     EXPECT_TRUE(Bounds(car).min().isApprox(Eigen::Vector3f(-2.25f, -0.9f, -0.75f))) << Bounds(car).min();
     EXPECT_TRUE(Bounds(car).max().isApprox(Eigen::Vector3f(2.25f, 0.9f, 0.75f))) << Bounds(car).max();
-    for (const Vertex& v : car.vertices) EXPECT_EQ(v.semantic, static_cast<uint32_t>(SemanticClass::kCar));
+    std::size_t glowing = 0;
+    for (const Vertex& v : car.vertices) {
+      EXPECT_EQ(v.semantic & kSemanticBits, static_cast<uint32_t>(SemanticClass::kCar));
+      if ((v.semantic & kEmissive) != 0) ++glowing;
+    }
+    EXPECT_EQ(glowing, 4u * 24u) << "four lamp boxes glow at night, nothing else";
   }
   // Different silhouettes: the roof's length tells a van from a sedan from a pickup.
   const auto cabin_length = [](CarStyle style) {

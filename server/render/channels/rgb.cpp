@@ -13,7 +13,7 @@ namespace sim4cv::render::outputs {
 extern const ChannelOutput RGB{proto::CHANNEL_RGB, GL_RGBA8, GL_RGB, GL_UNSIGNED_BYTE, false,
                                {0.62f, 0.76f, 0.90f, 1.0f}, {}, "vec4", R"(
 #ifdef SIM4CV_FULL_LOOK
-  OUT = ShadeFull(v_color, v_world_normal, v_world_position, v_semantic, v_fog);
+  OUT = ShadeFull(v_color, v_world_normal, v_world_position, v_semantic, v_fog);  // class and flags
 #else
   const float kAmbient = 0.35;
   float lambert = max(dot(normalize(v_world_normal), u_to_light), 0.0);

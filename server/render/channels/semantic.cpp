@@ -7,7 +7,7 @@ namespace sim4cv::render::outputs {
 
 extern const ChannelOutput SEMANTIC{proto::CHANNEL_SEMANTIC, GL_R8UI, GL_RED_INTEGER, GL_UNSIGNED_BYTE, true,
                                     {}, {10, 0, 0, 0}, "uint", R"(
-  OUT = v_semantic;
+  OUT = v_semantic & 255u;  // the class; higher bits are flags (render_types.h)
 )"};
 
 }  // namespace sim4cv::render::outputs
