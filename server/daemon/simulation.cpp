@@ -97,16 +97,24 @@ void Simulation::Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change
 // Per-episode randomisation draws episode k's conditions at the start of
 // episode k (the daemon's start is episode 0); per-N-frames draws frame 0's.
 void Simulation::StartEpisode(Change& change) {
-  const uint64_t episode = episodes_++;
+  ++episodes_;
   if (randomize_seed_ == 0) return;
-  conditions_ = conditions::Randomized(randomize_seed_, randomize_every_ == 0 ? episode : 0, conditions_);
+  DrawConditions();
   change.new_conditions = true;
 }
 
 bool Simulation::AdvanceConditions() {
   if (randomize_seed_ == 0 || randomize_every_ == 0 || state_.frame_id % randomize_every_ != 0) return false;
-  conditions_ = conditions::Randomized(randomize_seed_, state_.frame_id / randomize_every_, conditions_);
+  DrawConditions();
   return true;
+}
+
+// The draw of the randomisation in force for now: this episode's (the
+// episodes begun, less one), or that of the block of randomize_every_
+// frames the state is in. Keeps the quality and sensor noise.
+void Simulation::DrawConditions() {
+  const uint64_t draw = randomize_every_ == 0 ? episodes_ - 1 : state_.frame_id / randomize_every_;
+  conditions_ = conditions::Randomized(randomize_seed_, draw, conditions_);
 }
 
 Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Configured& answer) {
@@ -395,8 +403,8 @@ void Simulation::SetConditions(const proto::SetConditions& request, Change& chan
   randomize_seed_ = request.randomize_seed();
   randomize_every_ = request.randomize_every_frames();
   if (randomize_seed_ != 0) {
-    const uint64_t draw = randomize_every_ == 0 ? episodes_ - 1 : state_.frame_id / randomize_every_;  // this episode's
-    conditions_ = conditions::Randomized(randomize_seed_, draw, next);
+    conditions_ = next;
+    DrawConditions();
     change.new_conditions = true;
     return;
   }

@@ -117,6 +117,7 @@ class Simulation {
   uint32_t randomize_every_ = 0;
   uint64_t episodes_ = 0;
   void StartEpisode(Change& change);
+  void DrawConditions();
   std::shared_ptr<const runlog::ReplayTrack> replay_;  // --replay; kept across Reset
 };
 

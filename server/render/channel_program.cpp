@@ -18,7 +18,7 @@ uniform mat4 u_projection;
 uniform mat3 u_normal_matrix;
 uniform mat4 u_previous_model;
 uniform mat4 u_previous_view_projection;
-uniform float u_fog_density;  // per metre; the full look's fog (look.h)
+uniform vec4 u_fog;  // the full look's fog (look.h): a is its density per metre
 out vec3 v_world_normal;
 out vec3 v_world_position;
 out vec3 v_camera_normal;
@@ -31,7 +31,7 @@ void main() {
   vec4 world_position = u_model * vec4(a_position, 1.0);
   vec4 camera_position = u_view * world_position;
   v_world_position = world_position.xyz;
-  v_fog = 1.0 - exp(-u_fog_density * length(camera_position.xyz));
+  v_fog = 1.0 - exp(-u_fog.a * length(camera_position.xyz));
   v_depth = -camera_position.z;  // camera-space z is affine over a triangle, so interpolation is exact
   v_world_normal = u_normal_matrix * a_normal;
   v_camera_normal = mat3(u_view) * v_world_normal;  // the view is rigid: its 3x3 part rotates

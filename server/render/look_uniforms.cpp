@@ -10,14 +10,12 @@ void LookUniforms::Locate(GLuint program) {
   ambient_sky_ = locate("u_ambient_sky");
   ambient_ground_ = locate("u_ambient_ground");
   fog_ = locate("u_fog");
-  fog_density_ = locate("u_fog_density");
   variation_ = locate("u_variation");
   noise_ = locate("u_noise");
   noise_seed_ = locate("u_noise_seed");
   weather_ = locate("u_weather");
   camera_position_ = locate("u_camera_position");
   shadow_from_world_ = locate("u_shadow_from_world");
-  shadow_texel_ = locate("u_shadow_texel");
   shadow_map_ = locate("u_shadow_map");
   to_light_ = locate("u_to_light");
 }
@@ -30,14 +28,12 @@ void LookUniforms::Apply(const Look& look, const Eigen::Vector3f& camera_positio
   glUniform3fv(ambient_sky_, 1, look.ambient_sky.data());
   glUniform3fv(ambient_ground_, 1, look.ambient_ground.data());
   glUniform4f(fog_, look.fog_colour.x(), look.fog_colour.y(), look.fog_colour.z(), look.fog_density);
-  glUniform1f(fog_density_, look.fog_density);
   glUniform1ui(variation_, look.variation);
   glUniform2f(noise_, look.noise_read / 255.0f, look.noise_shot / 255.0f);  // in [0, 1] units
   glUniform1ui(noise_seed_, noise_seed);
   glUniform4f(weather_, look.clouds, look.wetness, look.lights, look.exposure);
   glUniform3fv(camera_position_, 1, camera_position.data());
   glUniformMatrix4fv(shadow_from_world_, 1, GL_FALSE, shadow.shadow_from_world.data());
-  glUniform1f(shadow_texel_, shadow.texel);
   glUniform1i(shadow_map_, kShadowTextureUnit);
   glUniform3fv(to_light_, 1, look.to_sun.data());
 }

@@ -16,7 +16,6 @@ namespace sim4cv::render {
 struct ShadowSampling {
   GLuint texture = 0;
   Eigen::Matrix4f shadow_from_world = Eigen::Matrix4f::Identity();  // to the map's [0,1]^3
-  float texel = 0.0f;                                                // one texel, in [0,1] units
 };
 
 // The texture unit the shadow map is bound to while drawing.
@@ -32,9 +31,9 @@ class LookUniforms {
 
  private:
   GLint sun_ = -1, sky_zenith_ = -1, sky_horizon_ = -1, ambient_sky_ = -1, ambient_ground_ = -1, fog_ = -1;
-  GLint fog_density_ = -1, variation_ = -1, noise_ = -1, noise_seed_ = -1;
+  GLint variation_ = -1, noise_ = -1, noise_seed_ = -1;
   GLint weather_ = -1, camera_position_ = -1, shadow_from_world_ = -1;
-  GLint shadow_texel_ = -1, shadow_map_ = -1, to_light_ = -1;
+  GLint shadow_map_ = -1, to_light_ = -1;
 };
 
 }  // namespace sim4cv::render

@@ -46,7 +46,7 @@ struct MeshRange {
   size_t first_index = 0;
   Eigen::Vector3f sphere_center = Eigen::Vector3f::Zero();  // model frame
   float sphere_radius = 0.0f;
-  bool casts_shadow = false;  // has a vertex that is not FlatGround
+  bool flat_ground = false;  // every vertex is FlatGround: drawn last, casts no shadow
 };
 
 MeshRange BoundingSphere(const Mesh& mesh) {
@@ -135,6 +135,8 @@ struct Renderer::Impl {
   void UsePlanes(PlaneSet planes, uint32_t look);
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
   void Draw(const DrawItem& item) const;
+  // The draw call of one mesh, with whatever program and uniforms are set.
+  void DrawMesh(MeshId mesh) const;
   void DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
                  std::span<uint32_t> unoccluded_pixels);
   // Draws the sun's shadow map of `items` for `camera`; how to sample it.
@@ -148,8 +150,8 @@ void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
   std::vector<uint32_t> indices;
   for (const Mesh& mesh : all_meshes) {
     MeshRange range = BoundingSphere(mesh);
-    range.casts_shadow = std::any_of(mesh.vertices.begin(), mesh.vertices.end(),
-                                     [](const Vertex& v) { return !FlatGround(v.semantic & kSemanticBits); });
+    range.flat_ground = std::all_of(mesh.vertices.begin(), mesh.vertices.end(),
+                                    [](const Vertex& v) { return FlatGround(v.semantic & kSemanticBits); });
     range.first_index = indices.size();
     range.index_count = static_cast<GLsizei>(mesh.indices.size());
     const auto base_vertex = static_cast<uint32_t>(vertices.size());
@@ -228,12 +230,16 @@ bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vec
 }
 
 void Renderer::Impl::Draw(const DrawItem& item) const {
-  const MeshRange& mesh = meshes[item.mesh];
   const Eigen::Matrix3f normal_matrix = item.world_from_model.topLeftCorner<3, 3>().inverse().transpose();
   glUniformMatrix4fv(program->u_model, 1, GL_FALSE, item.world_from_model.data());
   glUniformMatrix4fv(program->u_previous_model, 1, GL_FALSE, item.previous_world_from_model.data());
   glUniformMatrix3fv(program->u_normal_matrix, 1, GL_FALSE, normal_matrix.data());
   glUniform1ui(program->u_instance, item.instance);
+  DrawMesh(item.mesh);
+}
+
+void Renderer::Impl::DrawMesh(MeshId id) const {
+  const MeshRange& mesh = meshes[id];
   glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT,
                  reinterpret_cast<const void*>(mesh.first_index * sizeof(uint32_t)));
 }
@@ -274,7 +280,7 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
     for (uint32_t i = 0; i < items.size(); ++i) {
       const DrawItem& item = items[i];
       const MeshRange& mesh = meshes[item.mesh];
-      if (mesh.casts_shadow == ground_pass || mesh.index_count == 0 || !InFrustum(item, planes)) continue;
+      if (mesh.flat_ground != ground_pass || mesh.index_count == 0 || !InFrustum(item, planes)) continue;
       Draw(item);
       if (item.instance != kUnlabelled) labelled_drawn.push_back(i);
     }
@@ -298,14 +304,12 @@ ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<c
   // Fixed casters only when the map moved or the sun turned; moving ones every frame.
   const auto draw_casters = [&](bool fixed) {
     for (const DrawItem& item : items) {
-      if (item.fixed != fixed || item.mesh >= meshes.size() || !meshes[item.mesh].casts_shadow ||
+      if (item.fixed != fixed || item.mesh >= meshes.size() || meshes[item.mesh].flat_ground ||
           !InFrustum(item, planes)) {
         continue;
       }
-      const MeshRange& mesh = meshes[item.mesh];
       glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
-      glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT,
-                     reinterpret_cast<const void*>(mesh.first_index * sizeof(uint32_t)));
+      DrawMesh(item.mesh);
     }
   };
   if (!shadow_map->FixedCastersCached(clip_from_world)) {

@@ -107,9 +107,7 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   uav_mesh_ = add_mesh(std::move(uav.body));
   rotor_mesh_ = add_mesh(std::move(uav.rotor));
   PedestrianParts walker = MakePedestrianParts(0);
-  pedestrian_mesh_ = add_mesh(std::move(walker.body));
-  leg_mesh_ = add_mesh(std::move(walker.leg));
-  arm_mesh_ = add_mesh(std::move(walker.arm));
+  walker_meshes_ = {add_mesh(std::move(walker.body)), add_mesh(std::move(walker.leg)), add_mesh(std::move(walker.arm))};
   // Entities take the ids below the static objects' (sim::kMaxEntityId).
   instance_id_bound_ = sim::kMaxEntityId + 1;
   for (const auto& object : static_labelled_)
@@ -139,7 +137,7 @@ void SceneGraphics::Update(const sim::State& state) {
         half_extents = scene_.uav.params.half_extents;
         break;
       case sim::EntityKind::kPedestrian:
-        mesh = pedestrian_mesh_;
+        mesh = walker_meshes_.body;
         half_extents = kPedestrianBox;
         box_centre.z() += kPedestrianBox.z();
         break;
@@ -152,11 +150,8 @@ void SceneGraphics::Update(const sim::State& state) {
         items_.push_back({rotor_mesh_, pose * RotorPose(uav_span_, rotor, state.sim_time), instance});
       }
     } else if (entity.kind == sim::EntityKind::kPedestrian) {
-      const auto limbs = LimbPoses(GaitPhase(entity.body.position.head<2>(), entity.body.Yaw()),
-                                   LimbSwing(entity.body.linear_velocity.norm()));
-      for (std::size_t limb = 0; limb < limbs.size(); ++limb) {
-        items_.push_back({limb < 2 ? leg_mesh_ : arm_mesh_, pose * limbs[limb], instance});
-      }
+      AppendLimbs(items_, walker_meshes_, pose, entity.body.position.head<2>(), entity.body.Yaw(),
+                  entity.body.linear_velocity.norm(), instance);
     }
     labelled_.push_back({instance, object_class, 0});
     moving_.push_back({instance, object_class, box_centre, entity.body.orientation, entity.body.linear_velocity,

@@ -59,7 +59,7 @@ class SceneGraphics {
   std::vector<DrawItem> previous_items_;  // items_ of the last Update
   std::size_t static_item_count_ = 0;
   MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0, rotor_mesh_ = 0;
-  MeshId pedestrian_mesh_ = 0, leg_mesh_ = 0, arm_mesh_ = 0;  // body and limbs
+  WalkerMeshIds walker_meshes_;
   float uav_span_ = 0.0f;
   std::vector<Eigen::Vector3f> lamps_;
   std::vector<LabelledObject> static_labelled_;

@@ -17,7 +17,6 @@ uniform vec4 u_fog;              // rgb: colour; a: density per metre
 uniform vec4 u_weather;          // x: clouds, y: wetness, z: night lights, w: exposure
 uniform vec3 u_camera_position;  // world
 uniform mat4 u_shadow_from_world;  // to the shadow map's [0,1]^3
-uniform float u_shadow_texel;      // one shadow-map texel in [0,1] units
 uniform sampler2DShadow u_shadow_map;
 uniform uint u_variation;          // 0: none; else the seed of a colour jitter per object
 uniform vec2 u_noise;              // sensor noise: read sigma, shot gain, in [0, 1] units; 0, 0: none

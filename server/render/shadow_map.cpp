@@ -137,7 +137,7 @@ ShadowSampling ShadowMap::End(const Eigen::Matrix4f& clip_from_world) const {
   Eigen::Matrix4f to_unit = Eigen::Matrix4f::Identity() * 0.5f;  // clip [-1,1] -> [0,1]
   to_unit(3, 3) = 1.0f;
   to_unit.block<3, 1>(0, 3).setConstant(0.5f);
-  return ShadowSampling{texture_, to_unit * clip_from_world, 1.0f / static_cast<float>(size_)};
+  return ShadowSampling{texture_, to_unit * clip_from_world};
 }
 
 }  // namespace sim4cv::render

@@ -88,16 +88,12 @@ void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time
   for (std::size_t i = 0; i < state.walkers.size(); ++i) {
     const traffic::Walker& walker = state.walkers[i];
     // The walker's body stands on its origin; its box is centred half its height up.
-    const WalkerMeshes& look = walker_meshes_[i % kWalkerLooks];
+    const WalkerMeshIds& look = walker_meshes_[i % kWalkerLooks];
     const auto id = static_cast<InstanceId>(first_walker_ + i);
     add(look.body, id, proto::OBJECT_CLASS_PEDESTRIAN, walker.position, walker.heading, 0.0, kPedestrianBox.z(),
         kPedestrianBox, walker.linear_velocity, 0.0);
-    const Eigen::Matrix4f body = items.back().world_from_model;
-    const std::array<Eigen::Matrix4f, 4> limbs =
-        LimbPoses(GaitPhase(walker.position.head<2>(), walker.heading), LimbSwing(walker.linear_velocity.norm()));
-    for (std::size_t limb = 0; limb < limbs.size(); ++limb) {
-      items.push_back({limb < 2 ? look.leg : look.arm, body * limbs[limb], id});
-    }
+    AppendLimbs(items, look, items.back().world_from_model, walker.position.head<2>(), walker.heading,
+                walker.linear_velocity.norm(), id);
   }
 }
 

@@ -13,6 +13,7 @@
 #include "server/render/ground_truth.h"
 #include "server/render/object_catalog.h"
 #include "server/render/render_types.h"
+#include "server/render/traffic_meshes.h"
 #include "server/sim/traffic/traffic_ids.h"
 #include "server/sim/traffic/traffic_state.h"
 
@@ -51,10 +52,7 @@ class TrafficGraphics {
   std::vector<InstanceId> light_ids_;
   std::array<MeshId, 3> lamp_meshes_{};  // by traffic::Signal
   std::array<MeshId, kCarVariants> car_meshes_{};
-  struct WalkerMeshes {
-    MeshId body = 0, leg = 0, arm = 0;
-  };
-  std::array<WalkerMeshes, kWalkerLooks> walker_meshes_{};
+  std::array<WalkerMeshIds, kWalkerLooks> walker_meshes_{};
   InstanceId first_moving_car_ = 0, first_walker_ = 0, id_bound_ = 0;
 };
 

@@ -112,6 +112,14 @@ double GaitPhase(const Eigen::Vector2d& position, double heading) {
 
 double LimbSwing(double speed) { return kMaxLimbSwing * std::clamp(speed / 1.4, 0.0, 1.0); }
 
+void AppendLimbs(std::vector<DrawItem>& items, const WalkerMeshIds& meshes, const Eigen::Matrix4f& body_pose,
+                 const Eigen::Vector2d& position, double heading, double speed, InstanceId id) {
+  const std::array<Eigen::Matrix4f, 4> limbs = LimbPoses(GaitPhase(position, heading), LimbSwing(speed));
+  for (std::size_t limb = 0; limb < limbs.size(); ++limb) {
+    items.push_back({limb < 2 ? meshes.leg : meshes.arm, body_pose * limbs[limb], id});
+  }
+}
+
 Mesh MakePedestrianMesh(uint32_t variant) {
   const PedestrianParts parts = MakePedestrianParts(variant);
   Mesh mesh = parts.body;

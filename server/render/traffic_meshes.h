@@ -50,6 +50,15 @@ double GaitPhase(const Eigen::Vector2d& position, double heading);
 // How far the limbs swing at `speed` m/s: none standing, full at 1.4 m/s and up.
 double LimbSwing(double speed);
 
+// A walker's meshes once added to the scene's mesh list.
+struct WalkerMeshIds {
+  MeshId body = 0, leg = 0, arm = 0;
+};
+// Appends the four limbs of a walker whose body is drawn at `body_pose`,
+// swinging for its ground `position`, `heading` and `speed` (instance `id`).
+void AppendLimbs(std::vector<DrawItem>& items, const WalkerMeshIds& meshes, const Eigen::Matrix4f& body_pose,
+                 const Eigen::Vector2d& position, double heading, double speed, InstanceId id);
+
 // A walker standing, in one mesh: body and limbs at rest. 108 triangles.
 Mesh MakePedestrianMesh(uint32_t variant);
 
