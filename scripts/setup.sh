@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake pkg-config ccache
-  libbullet-dev libeigen3-dev libosmesa6-dev libboost-dev
+  libbullet-dev libeigen3-dev libosmesa6-dev libboost-dev libjpeg62-turbo-dev
   protobuf-compiler libprotobuf-dev
   libopencv-dev libopencv-contrib-dev
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -64,6 +64,33 @@ std::string ChannelHelp() {
   return text;
 }
 
+// One line per camera effect (protocol/effects.h), wrapped like the rest.
+std::string EffectsHelp() {
+  std::string text;
+  for (const effects::EffectInfo& info : effects::kEffects) {
+    std::ostringstream line;
+    line << "  --" << info.flag << " V";
+    std::string head = line.str();
+    head.resize(28, ' ');
+    std::ostringstream what;
+    what << info.summary << "; " << info.min << " .. " << info.max;
+    if (!info.unit.empty()) what << " " << info.unit;
+    what << " (default " << info.off << ")";
+    std::string words = what.str(), row = head;
+    std::istringstream split(words);
+    std::string word;
+    while (split >> word) {
+      if (row.size() + 1 + word.size() > 100) {
+        text += row + "\n";
+        row = std::string(28, ' ');
+      }
+      row += (row.back() == ' ' ? "" : " ") + word;
+    }
+    text += row + "\n";
+  }
+  return text;
+}
+
 }  // namespace
 
 uint32_t Config::substeps_per_frame() const {
@@ -134,7 +161,8 @@ Usage: sim4cvd [flags]
                             colour jitter per object) from SEED, reproducibly (default 0: off)
   --randomize-every N       with --randomize, new conditions every N frames (default 0: once per
                             episode, i.e. at start, Reset and LoadMap)
-  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
+Camera effects (docs/protocol.md, "Camera effects"; all off by default, a lens distorts every channel):
+)" + EffectsHelp() + R"(  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --log FILE                record every frame (poses, tracker and ground-truth boxes, car controls)
                             to the run log FILE (docs/logs.md; extension .s4log by convention)
   --log-label TEXT          what the run is, e.g. the tracker's name, for the log's header (default:
@@ -157,7 +185,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   Config config;
   std::optional<double> hour;  // --hour, applied after --conditions wherever it stands
   using Setter = std::function<void(const std::string& flag, const std::string& value)>;
-  const std::map<std::string, Setter> setters = {
+  std::map<std::string, Setter> setters = {
       {"--scene", [&](auto&, auto& v) { config.scene_file = v; }},
       {"--map", [&](auto&, auto& v) { config.map_file = v; }},
       {"--route", [&](auto&, auto& v) { config.route = v; }},
@@ -249,6 +277,11 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
          config.conditions.quality = *quality;
        }},
   };
+  for (const effects::EffectInfo& info : effects::kEffects) {
+    setters.emplace("--" + std::string(info.flag), [&config, &info](auto& f, auto& v) {
+      config.effects.*info.member = ParseNumber<double>(f, v, info.min, info.max);
+    });
+  }
   for (std::size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--help" || args[i] == "-h") {
       help_text = HelpText();
@@ -264,6 +297,8 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   SIM4CV_THROW_UNLESS(config.log_label.empty() || !config.log_file.empty(), "--log-label needs --log FILE");
   if (!config.traffic_seed_set) config.traffic.seed = config.seed;
   config.conditions.hour = hour.value_or(conditions::Info(config.conditions.preset).hour);
+  const std::string effects_problem = effects::Check(config.effects, true);
+  SIM4CV_THROW_UNLESS(effects_problem.empty(), effects_problem);
   SIM4CV_THROW_UNLESS(config.randomize_every_frames == 0 || config.randomize_seed != 0,
                       "--randomize-every needs --randomize SEED (a non-zero seed)");
   SIM4CV_THROW_UNLESS(config.replay_only.empty() || !config.replay_file.empty(),

@@ -12,6 +12,7 @@
 #include "server/common/limits.h"
 #include "server/sim/traffic/traffic_config.h"
 #include "protocol/conditions.h"
+#include "protocol/effects.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::daemon {
@@ -34,6 +35,9 @@ struct Config {
   // Weather, time of day and quality of the RGB images (--conditions,
   // --hour, --quality); clients change them with Configure.set_conditions.
   conditions::Conditions conditions;
+  // Camera effects (--antialias, --lens-k1, ...; protocol/effects.h); clients
+  // change them with Configure.set_effects.
+  effects::CameraEffects effects;
   // Domain randomisation (--randomize SEED, --randomize-every N): 0 = off.
   uint64_t randomize_seed = 0;
   uint32_t randomize_every_frames = 0;  // 0: once per episode

@@ -111,6 +111,7 @@ void FrameAssembler::Assemble(uint32_t index, const sim::CameraSpec& spec, const
   render::CameraView view = graphics_->CameraAt(spec, state);
   view.previous_world_from_camera = previous_views_.Of(index, spec, view);
   view.noise_seed = static_cast<uint32_t>(state.frame_id * 0x9E3779B1u + index);  // repeatable per frame and camera
+  view.effects = effects_;
   renderer_->Render(view, graphics_->draw_items(), buffers,
                     boxes ? std::span<uint32_t>(unoccluded_pixels_) : std::span<uint32_t>());
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {

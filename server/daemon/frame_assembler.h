@@ -37,6 +37,8 @@ class FrameAssembler {
   void Build(const sim::Scene& scene, const std::vector<sim::CameraSpec>& cameras);
   // How RGB is lit from now on, kept across Build (look.h).
   void SetLook(const render::Look& look);
+  // What every camera does to the light from now on (protocol/effects.h).
+  void SetEffects(const effects::CameraEffects& effects) { effects_ = effects; }
   // Whether the render targets are large enough for every camera.
   bool Fits(const std::vector<sim::CameraSpec>& cameras) const;
   // Frees the GL objects (while the context is still current).
@@ -63,6 +65,7 @@ class FrameAssembler {
   std::unique_ptr<render::SceneGraphics> graphics_;
   std::unique_ptr<render::Renderer> renderer_;
   render::Look look_;
+  effects::CameraEffects effects_;
   render::BoxExtractor boxes_;
   render::PreviousViews previous_views_;
   std::vector<uint32_t> unoccluded_pixels_;

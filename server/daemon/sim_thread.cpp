@@ -159,6 +159,7 @@ void SimThread::RunRealtime() {
 
 void SimThread::BuildGraphics() {
   frames_.SetLook(render::LookOf(sim_.conditions()));
+  frames_.SetEffects(sim_.effects());
   frames_.Build(sim_.scene(), sim_.cameras());
 }
 
@@ -238,6 +239,10 @@ void SimThread::Configure(session::ConfigureCommand& command) {
     if (change.new_conditions) {
       frames_.SetLook(render::LookOf(sim_.conditions()));
       LOG_INFO("conditions now " << conditions::Describe(sim_.conditions()));
+    }
+    if (change.new_effects) {
+      frames_.SetEffects(sim_.effects());
+      LOG_INFO("camera effects now " << effects::Describe(sim_.effects()));
     }
     AfterChange(change, answer.world());  // only now does the answer hold the world
   } catch (const ConfigureError& refused) {

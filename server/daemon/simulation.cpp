@@ -6,6 +6,7 @@
 
 #include "server/common/limits.h"
 #include "server/daemon/run_logger.h"
+#include "server/session/effects_wire.h"
 #include "server/sim/map/map_text.h"
 
 namespace sim4cv::daemon {
@@ -41,6 +42,7 @@ auto Checked(Action&& action) {
 Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> scene)
     : config_(config),
       conditions_(config.conditions),
+      effects_(config.effects),
       randomize_seed_(config.randomize_seed),
       randomize_every_(config.randomize_every_frames) {
   if (!config.replay_file.empty()) replay_ = LoadReplayTrack(config, *scene);
@@ -157,6 +159,9 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       break;
     case Kind::kSetConditions:
       SetConditions(request.set_conditions(), change);
+      break;
+    case Kind::kSetEffects:
+      SetEffects(request.set_effects(), change);
       break;
     case Kind::REQUEST_NOT_SET:
       throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "Configure carries no request");
@@ -417,6 +422,17 @@ void Simulation::SetConditions(const proto::SetConditions& request, Change& chan
   change.new_conditions = true;
 }
 
+// Ranges are checked by CheckConfigure; whether the lens folds depends on
+// the coefficients already in force too, so it is checked here.
+void Simulation::SetEffects(const proto::CameraEffects& request, Change& change) {
+  effects::CameraEffects next = effects_;
+  session::ApplyEffects(request, next);
+  const std::string problem = effects::Check(next, false);
+  if (!problem.empty()) throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, problem);
+  effects_ = next;
+  change.new_effects = true;
+}
+
 void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   out.Clear();
   out.set_scene_name(scene_->name);
@@ -449,6 +465,7 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   look.set_randomize_every_frames(randomize_every_);
   look.set_noise_read(conditions_.noise_read);
   look.set_noise_shot(conditions_.noise_shot);
+  session::FillEffects(effects_, *out.mutable_effects());
 }
 
 }  // namespace sim4cv::daemon

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "protocol/conditions.h"
+#include "protocol/effects.h"
 #include "server/daemon/config.h"
 #include "server/sim/scene.h"
 #include "server/sim/world.h"
@@ -53,6 +54,8 @@ class Simulation {
     bool world_changed = true;
     // SetConditions: the renderer needs the new look.
     bool new_conditions = false;
+    // SetEffects: the renderer needs the new camera effects.
+    bool new_effects = false;
   };
   // Carries out `request` and fills `answer`, or throws ConfigureError
   // (changing nothing then). Whatever else it throws (std::bad_alloc while
@@ -75,6 +78,8 @@ class Simulation {
   // Once per frame, after State::frame_id advanced: true if the domain
   // randomisation drew new conditions for this frame (every N frames).
   bool AdvanceConditions();
+  // Camera effects: the config's, then changed field by field by SetEffects.
+  const effects::CameraEffects& effects() const { return effects_; }
 
  private:
   void Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change);
@@ -87,6 +92,7 @@ class Simulation {
   void LoadMap(const proto::LoadMap& load, Change& change);
   void QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult& out) const;
   void SetConditions(const proto::SetConditions& request, Change& change);
+  void SetEffects(const proto::CameraEffects& request, Change& change);
   const sim::Entity& EntityOf(uint32_t id, const char* what) const;
   // The traffic a LoadMap asks for: its settings, else the daemon's flags.
   traffic::TrafficConfig TrafficFor(const proto::LoadMap& load) const;
@@ -111,6 +117,7 @@ class Simulation {
   sim::State state_;
   std::vector<sim::CameraSpec> cameras_;
   conditions::Conditions conditions_;
+  effects::CameraEffects effects_;
   // Domain randomisation: seed (0: off), period (0: per episode) and the
   // episodes begun, which number the per-episode draws.
   uint64_t randomize_seed_ = 0;

@@ -30,6 +30,7 @@ CameraIntrinsics IntrinsicsOf(const CameraView& view) {
   intrinsics.cy = 0.5 * view.height;
   intrinsics.width = view.width;
   intrinsics.height = view.height;
+  intrinsics.lens = view.effects;
   return intrinsics;
 }
 
@@ -46,8 +47,9 @@ BoxProjector::BoxProjector(const CameraView& view)
       far_m_(view.far_m) {}
 
 Eigen::Vector2d BoxProjector::ToPixel(const Eigen::Vector3d& camera_point) const {
-  return {intrinsics_.fx * camera_point.x() / camera_point.z() + intrinsics_.cx,
-          intrinsics_.fy * camera_point.y() / camera_point.z() + intrinsics_.cy};
+  double x = camera_point.x() / camera_point.z(), y = camera_point.y() / camera_point.z();
+  if (effects::Distorts(intrinsics_.lens)) effects::Distort(intrinsics_.lens, x, y, x, y);
+  return {intrinsics_.fx * x + intrinsics_.cx, intrinsics_.fy * y + intrinsics_.cy};
 }
 
 ImageRect BoxProjector::Project(const Eigen::Vector3d& centre, const Eigen::Quaterniond& orientation,
@@ -75,14 +77,19 @@ ImageRect BoxProjector::Project(const Eigen::Vector3d& centre, const Eigen::Quat
     low = low.cwiseMin(pixel);
     high = high.cwiseMax(pixel);
   };
+  // A lens bends straight edges: their extremes may lie between the corners.
+  const int steps = effects::Distorts(intrinsics_.lens) ? 256 : 0;
   for (int i = 0; i < 8; ++i) {
     const Eigen::Vector3d& a = corners[i];
     if (a.z() >= near_m_) include(a);
     for (int bit : {1, 2, 4}) {
       if (i & bit) continue;  // each edge once: from the corner without the bit
       const Eigen::Vector3d& b = corners[i | bit];
-      if ((a.z() < near_m_) == (b.z() < near_m_)) continue;
-      include(a + (b - a) * ((near_m_ - a.z()) / (b.z() - a.z())));
+      if ((a.z() < near_m_) != (b.z() < near_m_)) include(a + (b - a) * ((near_m_ - a.z()) / (b.z() - a.z())));
+      for (int k = 1; k < steps; ++k) {
+        const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(k) / steps);
+        if (p.z() >= near_m_) include(p);
+      }
     }
   }
   const double x0 = std::max(low.x(), 0.0), y0 = std::max(low.y(), 0.0);

@@ -19,6 +19,8 @@ struct CameraIntrinsics {
   double fx = 0.0, fy = 0.0;  // focal lengths, pixels
   double cx = 0.0, cy = 0.0;  // principal point, pixels
   uint32_t width = 0, height = 0;
+  // The lens (protocol/effects.h), applied to (x/z, y/z) before fx, cx.
+  effects::CameraEffects lens;
 };
 
 // A rigid pose: maps the frame's coordinates into world coordinates.
@@ -54,11 +56,14 @@ class BoxProjector {
   // nothing occluded it. Corners behind the near plane are replaced by the
   // points where the box's edges cross it, so a box around the camera still
   // projects correctly. Empty if no part of the box is in view or all of it
-  // lies beyond the far plane.
+  // lies beyond the far plane. With a lens, edges bow: each is followed in
+  // small steps, so the rectangle is within a hundredth of a pixel of the
+  // curve's extent.
   ImageRect Project(const Eigen::Vector3d& centre, const Eigen::Quaterniond& orientation,
                     const Eigen::Vector3d& half_extents) const;
 
-  // The pixel a point in OpenCV camera coordinates (z > 0) lands on.
+  // The pixel a point in OpenCV camera coordinates (z > 0) lands on,
+  // through the lens if the camera has one.
   Eigen::Vector2d ToPixel(const Eigen::Vector3d& camera_point) const;
 
   const CameraIntrinsics& intrinsics() const { return intrinsics_; }

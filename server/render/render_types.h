@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "protocol/channels.h"
+#include "protocol/effects.h"
 #include "protocol/semantic_classes.h"
 
 namespace sim4cv::render {
@@ -86,6 +87,9 @@ struct CameraView {
   // Seeds this frame's sensor noise (look.h), so a frame is repeatable: the
   // daemon uses the frame id and the camera.
   uint32_t noise_seed = 0;
+  // What the camera does to the light (protocol/effects.h; all off by
+  // default). A lens distorts every channel alike; the rest change RGB only.
+  effects::CameraEffects effects;
 };
 
 // Where one render writes its channels, one pointer per entry of

@@ -13,7 +13,11 @@
 #include "server/common/check.h"
 #include "server/render/camera_math.h"
 #include "server/render/channel_program.h"
+#include "server/render/effects_pass.h"
 #include "server/render/gl_program.h"
+#include "server/render/jpeg.h"
+#include "server/render/lens.h"
+#include "server/render/render_targets.h"
 #include "server/render/shadow_map.h"
 #include "server/render/sky_pass.h"
 
@@ -40,6 +44,7 @@ bool FlatGround(uint32_t semantic) {
 }
 
 constexpr std::size_t kRgbPlane = *channels::IndexOf(proto::CHANNEL_RGB);
+constexpr std::size_t kMaskPlane = *channels::IndexOf(proto::CHANNEL_MASK);
 
 struct MeshRange {
   GLsizei index_count = 0;
@@ -94,10 +99,11 @@ struct Renderer::Impl {
   std::array<std::unique_ptr<ChannelProgram>, kPlaneSets * ChannelProgram::kRgbLooks> programs;
   const ChannelProgram* program = nullptr;  // of the frame being drawn
   GLuint vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
-  GLuint framebuffer = 0;
-  // Colour attachment i holds plane i; made the first time it is drawn.
-  std::array<GLuint, channels::kPixelChannelCount> color_targets{};
-  GLuint depth_stencil_target = 0;
+  std::unique_ptr<RenderTargets> targets;  // at max_width x max_height
+  // With a lens, the ground truth is drawn at twice the resolution (made the
+  // first time): looked up through the lens map, its edges then move by at
+  // most a quarter pixel instead of half a pixel.
+  std::unique_ptr<RenderTargets> fine;
   std::vector<GLuint> queries;  // grows to the most instances seen in a frame
 
   Look look = LookOf(conditions::Conditions{});
@@ -109,6 +115,13 @@ struct Renderer::Impl {
   // Made the first time the full look draws RGB (with shadows, for the map).
   std::unique_ptr<ShadowMap> shadow_map;
   std::unique_ptr<SkyPass> sky;
+  // Made the first time a camera has effects (effects_pass.h, jpeg.h).
+  std::unique_ptr<EffectsPass> effects;
+  std::unique_ptr<JpegRoundTrip> jpeg;
+  // Scratch for a lensed view's visibility: the undistorted mask and, per
+  // instance, its pixels there and in the distorted mask.
+  std::vector<uint16_t> scene_mask;
+  std::vector<uint32_t> scene_visible, image_visible;
 
   // Per-frame scratch, kept to avoid allocating once warmed up.
   std::vector<uint32_t> labelled_drawn;  // indices of labelled items that survived culling
@@ -121,18 +134,23 @@ struct Renderer::Impl {
   // frees what it made (deleting name 0 is a no-op).
   ~Impl() {
     glDeleteQueries(static_cast<GLsizei>(queries.size()), queries.data());
-    glDeleteRenderbuffers(static_cast<GLsizei>(color_targets.size()), color_targets.data());
-    glDeleteRenderbuffers(1, &depth_stencil_target);
-    glDeleteFramebuffers(1, &framebuffer);
     glDeleteBuffers(1, &index_buffer);
     glDeleteBuffers(1, &vertex_buffer);
     glDeleteVertexArrays(1, &vertex_array);
   }
 
   void UploadMeshes(const std::vector<Mesh>& all_meshes);
-  void CreateFramebuffer();
-  // Makes the program and render targets for `planes` current.
-  void UsePlanes(PlaneSet planes, uint32_t look);
+  // Makes the program for `planes` and `look` current, drawing into `into`.
+  void UsePlanes(RenderTargets& into, PlaneSet planes, uint32_t look);
+  // One geometry pass of `items` into `into` at `scale` times the camera's
+  // size, drawing `planes` with the RGB `look` (ChannelProgram::RgbLook).
+  struct Pass {
+    const CameraView& camera;
+    Eigen::Matrix4f view, projection;  // projection: before the top-row-first mirror
+    ShadowSampling shadow;
+  };
+  void DrawPass(const Pass& pass, std::span<const DrawItem> items, RenderTargets& into, uint32_t scale,
+                PlaneSet planes, uint32_t look, std::span<uint32_t> unoccluded_pixels);
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
   void Draw(const DrawItem& item) const;
   // The draw call of one mesh, with whatever program and uniforms are set.
@@ -141,7 +159,12 @@ struct Renderer::Impl {
                  std::span<uint32_t> unoccluded_pixels);
   // Draws the sun's shadow map of `items` for `camera`; how to sample it.
   ShadowSampling DrawShadows(const CameraView& camera, std::span<const DrawItem> items);
-  void ReadBack(const CameraView& camera, const FrameBuffers& out) const;
+  // Reads the planes in `through` from the effects pass, the rest from the scene.
+  void ReadBack(const CameraView& camera, const FrameBuffers& out, PlaneSet through) const;
+  // With a lens, the occlusion queries counted undistorted pixels: rescales
+  // them by each instance's visible pixels in the distorted and the
+  // undistorted mask, so visibility means what it means without a lens.
+  void RescaleUnoccluded(const CameraView& camera, const uint16_t* image_mask, std::span<uint32_t> unoccluded_pixels);
   void CountUnoccludedPixels(std::span<const DrawItem> items, std::span<uint32_t> unoccluded_pixels);
 };
 
@@ -184,34 +207,8 @@ void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
   glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, sizeof(Vertex), reinterpret_cast<const void*>(offsetof(Vertex, semantic)));
 }
 
-void Renderer::Impl::CreateFramebuffer() {
-  glGenFramebuffers(1, &framebuffer);
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-  glGenRenderbuffers(1, &depth_stencil_target);
-  glBindRenderbuffer(GL_RENDERBUFFER, depth_stencil_target);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, static_cast<GLsizei>(max_width),
-                        static_cast<GLsizei>(max_height));
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_target);
-}
-
-void Renderer::Impl::UsePlanes(PlaneSet planes, uint32_t look) {
-  std::array<GLenum, channels::kPixelChannelCount> draw_buffers{};
-  for (GLuint i = 0; i < channels::kPixelChannelCount; ++i) {
-    draw_buffers[i] = GL_NONE;
-    if ((planes & (1u << i)) == 0) continue;
-    if (color_targets[i] == 0) {
-      glGenRenderbuffers(1, &color_targets[i]);
-      glBindRenderbuffer(GL_RENDERBUFFER, color_targets[i]);
-      glRenderbufferStorage(GL_RENDERBUFFER, kChannelOutputs[i]->target_format, static_cast<GLsizei>(max_width),
-                            static_cast<GLsizei>(max_height));
-      glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_RENDERBUFFER, color_targets[i]);
-    }
-    draw_buffers[i] = GL_COLOR_ATTACHMENT0 + i;
-  }
-  glDrawBuffers(static_cast<GLsizei>(draw_buffers.size()), draw_buffers.data());
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-    throw std::runtime_error("renderer framebuffer is incomplete");
-  }
+void Renderer::Impl::UsePlanes(RenderTargets& into, PlaneSet planes, uint32_t look) {
+  into.Bind(planes);
   auto& cached = programs[planes + kPlaneSets * look];
   if (!cached) cached = std::make_unique<ChannelProgram>(planes, look);  // once per set of channels and look
   program = cached.get();
@@ -287,6 +284,44 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
   }
 }
 
+void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items, RenderTargets& into, uint32_t scale,
+                              PlaneSet planes, uint32_t rgb_look, std::span<uint32_t> unoccluded_pixels) {
+  const CameraView& camera = pass.camera;
+  // GL's window origin is the bottom-left; mirroring y in clip space puts the
+  // image's top row first in glReadPixels. The mirror also reverses winding.
+  const Eigen::Matrix4f top_row_first = Eigen::Vector4f(1.0f, -1.0f, 1.0f, 1.0f).asDiagonal() * pass.projection;
+  const Eigen::Matrix4f previous_view_projection = top_row_first * RigidInverse(camera.previous_world_from_camera);
+  // The fast look keeps its fixed light; the full look's comes from the sun (look.h).
+  const Eigen::Vector3f to_light = look.full ? look.to_sun : Eigen::Vector3f(-0.4f, 0.3f, 0.85f).normalized();
+  const Eigen::Vector2f viewport(static_cast<float>(scale * camera.width), static_cast<float>(scale * camera.height));
+  const Eigen::Vector3f camera_position = camera.world_from_camera.block<3, 1>(0, 3);
+  const bool full_rgb = (rgb_look & ChannelProgram::kFull) != 0;
+
+  glViewport(0, 0, static_cast<GLsizei>(viewport.x()), static_cast<GLsizei>(viewport.y()));
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CW);
+  UsePlanes(into, planes, rgb_look);
+  glUniformMatrix4fv(program->u_view, 1, GL_FALSE, pass.view.data());
+  glUniformMatrix4fv(program->u_projection, 1, GL_FALSE, top_row_first.data());
+  glUniformMatrix4fv(program->u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
+  glUniform3fv(program->u_to_light, 1, to_light.data());
+  glUniform2fv(program->u_viewport, 1, viewport.data());
+  if (full_rgb) program->look.Apply(look, camera_position, pass.shadow, camera.noise_seed);
+  if ((rgb_look & ChannelProgram::kLamps) != 0) {
+    const Eigen::Vector3f ahead = camera_position - 15.0f * camera.world_from_camera.block<3, 1>(0, 2);
+    const int count = NearestLamps(ahead);
+    glUniform3fv(program->u_lamps, count, nearest_lamps[0].data());
+    glUniform1i(program->u_lamp_count, count);
+  }
+  DrawScene(items, FrustumPlanes(pass.projection * pass.view), unoccluded_pixels);
+  if (full_rgb) {
+    if (!sky) sky = std::make_unique<SkyPass>();
+    sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * pass.view, camera_position, look, camera.noise_seed);
+    glUseProgram(program->id());  // the counting pass draws with the scene's program
+  }
+}
+
 int Renderer::Impl::NearestLamps(const Eigen::Vector3f& point) {
   lamp_order.clear();
   for (uint32_t i = 0; i < lamps.size(); ++i) lamp_order.emplace_back((lamps[i] - point).squaredNorm(), i);
@@ -321,13 +356,35 @@ ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<c
   return shadow_map->End(clip_from_world);
 }
 
-void Renderer::Impl::ReadBack(const CameraView& camera, const FrameBuffers& out) const {
+void Renderer::Impl::ReadBack(const CameraView& camera, const FrameBuffers& out, PlaneSet through) const {
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   for (GLuint i = 0; i < channels::kPixelChannelCount; ++i) {
     if (out[i] == nullptr) continue;
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, (through & (1u << i)) != 0 ? effects->framebuffer() : targets->framebuffer());
     glReadBuffer(GL_COLOR_ATTACHMENT0 + i);
     glReadPixels(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height),
                  kChannelOutputs[i]->read_format, kChannelOutputs[i]->read_type, out[i]);
+  }
+}
+
+void Renderer::Impl::RescaleUnoccluded(const CameraView& camera, const uint16_t* image_mask,
+                                       std::span<uint32_t> unoccluded_pixels) {
+  const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
+  scene_mask.resize(static_cast<std::size_t>(max_width) * max_height);  // once: the largest image
+  scene_visible.assign(unoccluded_pixels.size(), 0);  // no reallocation once warmed up
+  image_visible.assign(unoccluded_pixels.size(), 0);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, targets->framebuffer());
+  glReadBuffer(GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(kMaskPlane));
+  glReadPixels(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height), GL_RED_INTEGER,
+               GL_UNSIGNED_SHORT, scene_mask.data());
+  for (std::size_t i = 0; i < pixels; ++i) {
+    if (scene_mask[i] < scene_visible.size()) ++scene_visible[scene_mask[i]];
+    if (image_mask[i] < image_visible.size()) ++image_visible[image_mask[i]];
+  }
+  for (std::size_t id = 1; id < unoccluded_pixels.size(); ++id) {
+    if (scene_visible[id] == 0 || image_visible[id] == 0) continue;
+    unoccluded_pixels[id] = static_cast<uint32_t>(
+        std::lround(static_cast<double>(unoccluded_pixels[id]) * image_visible[id] / scene_visible[id]));
   }
 }
 
@@ -360,7 +417,7 @@ void Renderer::Impl::CountUnoccludedPixels(std::span<const DrawItem> items, std:
     }
     glBeginQuery(GL_SAMPLES_PASSED, queries[queried_instances.size()]);
     for (; first < labelled_drawn.size() && items[labelled_drawn[first]].instance == instance; ++first) {
-      Draw(items[labelled_drawn[first]]);
+        Draw(items[labelled_drawn[first]]);
     }
     glEndQuery(GL_SAMPLES_PASSED);
     queried_instances.push_back(instance);
@@ -382,7 +439,7 @@ Renderer::Renderer(const std::vector<Mesh>& meshes, uint32_t max_width, uint32_t
     SIM4CV_DEMAND(kChannelOutputs[i]->channel == channels::kPixelChannels[i].id);
   }
   gl.UploadMeshes(meshes);
-  gl.CreateFramebuffer();
+  gl.targets = std::make_unique<RenderTargets>(max_width, max_height);
   ThrowOnGlError("Renderer setup");
 }
 
@@ -402,64 +459,68 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
                           camera.height <= gl.max_height,
                       "camera size " << camera.width << "x" << camera.height << " outside 1x1.." << gl.max_width
                                      << "x" << gl.max_height);
-  const Eigen::Matrix4f view = RigidInverse(camera.world_from_camera);
-  const Eigen::Matrix4f projection = Perspective(
-      camera.fov_y_deg, static_cast<float>(camera.width) / static_cast<float>(camera.height), camera.near_m,
-      camera.far_m);
-  // GL's window origin is the bottom-left; mirroring y in clip space puts the
-  // image's top row first in glReadPixels. The mirror also reverses winding.
-  const Eigen::Matrix4f top_row_first = Eigen::Vector4f(1.0f, -1.0f, 1.0f, 1.0f).asDiagonal() * projection;
-  const Eigen::Matrix4f previous_view_projection = top_row_first * RigidInverse(camera.previous_world_from_camera);
-  // The fast look keeps its fixed light; the full look's comes from the sun (look.h).
-  const Eigen::Vector3f to_light =
-      gl.look.full ? gl.look.to_sun : Eigen::Vector3f(-0.4f, 0.3f, 0.85f).normalized();
-  const Eigen::Vector2f viewport(static_cast<float>(camera.width), static_cast<float>(camera.height));
-  PlaneSet planes = 0;
+  PlaneSet wanted = 0;
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
-    if (out[i] != nullptr) planes |= 1u << i;
+    if (out[i] != nullptr) wanted |= 1u << i;
   }
-  if (planes == 0) return;  // nothing asked for: nothing drawn
+  if (wanted == 0) return;  // nothing asked for: nothing drawn
+  // Camera effects: a lens widens the pinhole view the scene is drawn with
+  // (the pass then distorts it); motion blur needs the flow; a lensed view's
+  // visibility needs the undistorted mask.
+  const PlaneSet through = EffectsPass::Through(camera, wanted);
+  const bool lens = effects::Distorts(camera.effects);
+  const bool rescale = lens && !unoccluded_pixels.empty() && out[kMaskPlane] != nullptr;
+  // With a lens every channel but RGB comes from the fine targets, the flow
+  // for motion blur too; the scene's targets then draw RGB, and the mask
+  // when visibility needs it.
+  const PlaneSet inputs = EffectsPass::Inputs(camera, through);
+  const PlaneSet fine_planes = lens ? (wanted | inputs) & ~(1u << kRgbPlane) : 0u;
+  const PlaneSet planes = ((wanted | inputs) & ~fine_planes) | (rescale ? 1u << kMaskPlane : 0u);
+  if (through != 0 && !gl.effects) gl.effects = std::make_unique<EffectsPass>(gl.max_width, gl.max_height);
+  const float widening = lens ? gl.effects->Prepare(camera) : 1.0f;
+  const Impl::Pass pass{camera, RigidInverse(camera.world_from_camera),
+                        Perspective(lens ? WidenedFov(camera.fov_y_deg, widening) : camera.fov_y_deg,
+                                    static_cast<float>(camera.width) / static_cast<float>(camera.height),
+                                    camera.near_m, camera.far_m),
+                        {}};
   const bool full_rgb = gl.look.full && (planes & (1u << kRgbPlane)) != 0;
-  const Eigen::Vector3f camera_position = camera.world_from_camera.block<3, 1>(0, 3);
-
   glBindVertexArray(gl.vertex_array);
   ShadowSampling shadow;
   if (full_rgb && gl.look.shadows) shadow = gl.DrawShadows(camera, items);
-
-  glBindFramebuffer(GL_FRAMEBUFFER, gl.framebuffer);
-  glViewport(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height));
-  glEnable(GL_CULL_FACE);
-  glCullFace(GL_BACK);
-  glFrontFace(GL_CW);
   uint32_t rgb_look = ChannelProgram::kFast;
   if (full_rgb) {
     rgb_look = ChannelProgram::kFull | (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
                (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u) |
                (gl.look.lights > 0.0f && !gl.lamps.empty() ? ChannelProgram::kLamps : 0u);
   }
-  gl.UsePlanes(planes, rgb_look);
-  const ChannelProgram& program = *gl.program;
-  glUniformMatrix4fv(program.u_view, 1, GL_FALSE, view.data());
-  glUniformMatrix4fv(program.u_projection, 1, GL_FALSE, top_row_first.data());
-  glUniformMatrix4fv(program.u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
-  glUniform3fv(program.u_to_light, 1, to_light.data());
-  glUniform2fv(program.u_viewport, 1, viewport.data());
-  if (full_rgb) program.look.Apply(gl.look, camera_position, shadow, camera.noise_seed);
-  if ((rgb_look & ChannelProgram::kLamps) != 0) {
-    const Eigen::Vector3f ahead = camera_position - 15.0f * camera.world_from_camera.block<3, 1>(0, 2);
-    const int count = gl.NearestLamps(ahead);
-    glUniform3fv(program.u_lamps, count, gl.nearest_lamps[0].data());
-    glUniform1i(program.u_lamp_count, count);
+  constexpr uint32_t kFineScale = 2;
+  if (fine_planes != 0) {
+    if (!gl.fine) gl.fine = std::make_unique<RenderTargets>(kFineScale * gl.max_width, kFineScale * gl.max_height);
+    gl.DrawPass({pass.camera, pass.view, pass.projection, shadow}, items, *gl.fine, kFineScale, fine_planes,
+                ChannelProgram::kFast, {});
   }
-
-  gl.DrawScene(items, FrustumPlanes(projection * view), unoccluded_pixels);
-  if (full_rgb) {
-    if (!gl.sky) gl.sky = std::make_unique<SkyPass>();
-    gl.sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * view, camera_position, gl.look, camera.noise_seed);
-    glUseProgram(program.id());  // the counting pass draws with the scene's program
+  // Last, so the counting pass below finds this pass's stencil, program and viewport.
+  if (planes != 0) {
+    gl.DrawPass({pass.camera, pass.view, pass.projection, shadow}, items, *gl.targets, 1, planes, rgb_look,
+                unoccluded_pixels);
   }
-  gl.ReadBack(camera, out);
-  if (!unoccluded_pixels.empty()) gl.CountUnoccludedPixels(items, unoccluded_pixels);
+  if (through != 0) {
+    gl.effects->Draw(camera, gl.targets->textures(), lens ? gl.fine->textures() : gl.targets->textures(),
+                     lens ? kFineScale : 1, through);
+  }
+  gl.ReadBack(camera, out, through);
+  if (camera.effects.jpeg_quality > 0 && out[kRgbPlane] != nullptr) {
+    if (!gl.jpeg) gl.jpeg = std::make_unique<JpegRoundTrip>();
+    gl.jpeg->Apply(out[kRgbPlane], camera.width, camera.height, static_cast<int>(camera.effects.jpeg_quality));
+  }
+  if (!unoccluded_pixels.empty() && planes != 0) {
+    glBindFramebuffer(GL_FRAMEBUFFER, gl.targets->framebuffer());
+    glUseProgram(gl.program->id());  // the scene pass's, whose uniforms hold this view
+    gl.CountUnoccludedPixels(items, unoccluded_pixels);
+    if (rescale) {
+      gl.RescaleUnoccluded(camera, reinterpret_cast<const uint16_t*>(out[kMaskPlane]), unoccluded_pixels);
+    }
+  }
   ThrowOnGlError("Renderer::Render");
 }
 

@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "protocol/conditions.h"
+#include "server/session/effects_wire.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
 #include "server/session/entity_kinds_wire.h"
@@ -195,6 +196,14 @@ std::string CheckSetConditions(const proto::SetConditions& request) {
   return check.problem();
 }
 
+// Ranges of the fields present; whether a lens folds (on top of the effects
+// in force) is the sim thread's to say (Simulation::SetEffects).
+std::string CheckSetEffects(const proto::CameraEffects& request) {
+  effects::CameraEffects asked;
+  ApplyEffects(request, asked);
+  return effects::Check(asked, false);
+}
+
 }  // namespace
 
 std::string CheckConfigure(const proto::Configure& request) {
@@ -216,6 +225,8 @@ std::string CheckConfigure(const proto::Configure& request) {
       return CheckQueryRoad(request.query_road());
     case Kind::kSetConditions:
       return CheckSetConditions(request.set_conditions());
+    case Kind::kSetEffects:
+      return CheckSetEffects(request.set_effects());
     case Kind::kRemove:
     case Kind::kReset:
     case Kind::kGetWorld:

@@ -52,6 +52,11 @@ void FillCamera(const render::CameraIntrinsics& intrinsics, const render::Pose& 
   out.set_cy(intrinsics.cy);
   out.set_width(intrinsics.width);
   out.set_height(intrinsics.height);
+  out.set_k1(intrinsics.lens.k1);
+  out.set_k2(intrinsics.lens.k2);
+  out.set_p1(intrinsics.lens.p1);
+  out.set_p2(intrinsics.lens.p2);
+  out.set_k3(intrinsics.lens.k3);
   SetVec3(pose.position, *meta.mutable_camera_pose()->mutable_position());
   SetQuaternion(pose.orientation, *meta.mutable_camera_pose()->mutable_orientation());
 }

@@ -61,7 +61,7 @@ class FrameEncodingTest : public ::testing::Test {
     building.visible_pixels = width;
     building.visibility = 1.0f;
     f.boxes = {car, building};
-    f.intrinsics = {155.5, 155.25, 160.0, 90.0, width, height};
+    f.intrinsics = {155.5, 155.25, 160.0, 90.0, width, height, {}};
     f.camera_pose.position = {1.5, -2.0, 16.0};
     f.camera_pose.orientation = Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5);
     const Eigen::Vector3d at_rest = Eigen::Vector3d::Zero();
