@@ -54,11 +54,23 @@ struct EffectInfo {
 inline const std::array kEffects = {SIM4CV_CAMERA_EFFECTS(SIM4CV_EFFECT_INFO)};
 #undef SIM4CV_EFFECT_INFO
 
-// Lens distortion needs the image to be reachable from every pixel: the
-// radial map r -> r (1 + k1 r^2 + k2 r^4 + k3 r^6) must keep growing up to
-// this undistorted radius (tan of the angle off axis; 2.0 is 63 degrees,
-// past the corners of a 90-degree-diagonal camera's view).
-inline constexpr double kLensCheckRadius = 2.0;
+// A barrel lens (negative k1) stops spreading the image at some radius
+// and then folds it back: OpenCV's model means nothing past there. A lens
+// must keep spreading at least until the distorted image reaches this radius
+// (tan of the angle off axis: 0.5 is 27 degrees); pixels of a wider camera
+// that lie past its fold are black and hold no ground truth.
+inline constexpr double kLensCheckRadius = 0.5;
+
+// The undistorted radius where the radial part of `e` folds (its derivative
+// d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)] reaches 0), or 1e9 if it does not
+// before r = 10.
+inline double FoldRadius(double k1, double k2, double k3) {
+  for (int i = 1; i <= 10000; ++i) {
+    const double r = i * 1e-3, r2 = r * r;
+    if (1 + 3 * k1 * r2 + 5 * k2 * r2 * r2 + 7 * k3 * r2 * r2 * r2 <= 0) return r;
+  }
+  return 1e9;
+}
 
 inline bool Distorts(const CameraEffects& e) { return e.k1 != 0 || e.k2 != 0 || e.p1 != 0 || e.p2 != 0 || e.k3 != 0; }
 inline bool Any(const CameraEffects& e) { return !(e == CameraEffects{}); }
@@ -78,7 +90,8 @@ inline void Distort(const CameraEffects& e, double x, double y, double& xd, doub
 }
 
 // The undistorted point that Distort maps onto (xd, yd): Newton's method
-// from (xd, yd). False if it does not converge to 1e-9.
+// from (xd, yd). False if it does not converge to 1e-9; a point past the
+// lens's fold (FoldRadius) is a root the model does not mean: check it.
 inline bool Undistort(const CameraEffects& e, double xd, double yd, double& x, double& y) {
   x = xd;
   y = yd;
@@ -125,15 +138,12 @@ inline std::string Check(const CameraEffects& e, bool flags) {
       return message.str();
     }
   }
-  // d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)] > 0 on (0, kLensCheckRadius].
-  for (int i = 1; i <= 200; ++i) {
-    const double r = kLensCheckRadius * i / 200.0, r2 = r * r;
-    if (1 + 3 * e.k1 * r2 + 5 * e.k2 * r2 * r2 + 7 * e.k3 * r2 * r2 * r2 <= 0) {
-      message << "the lens k1=" << e.k1 << " k2=" << e.k2 << " k3=" << e.k3 << " folds the image at " << r
-              << " (tan of the angle off axis; it must not fold before " << kLensCheckRadius
-              << "): use smaller coefficients";
-      return message.str();
-    }
+  const double fold = FoldRadius(e.k1, e.k2, e.k3), f2 = fold * fold;
+  const double reached = fold * (1 + f2 * (e.k1 + f2 * (e.k2 + f2 * e.k3)));
+  if (fold < 1e9 && reached < kLensCheckRadius) {
+    message << "the lens k1=" << e.k1 << " k2=" << e.k2 << " k3=" << e.k3 << " folds the image at radius " << reached
+            << " (tan of the angle off axis; it must reach " << kLensCheckRadius << "): use smaller coefficients";
+    return message.str();
   }
   return {};
 }

@@ -118,6 +118,24 @@ const char* Swizzle(const char* glsl_type) {
   return type == "vec4" ? "" : type == "vec3" ? ".rgb" : type == "vec2" ? ".rg" : ".r";
 }
 
+// The channel's clear value (what it holds where nothing was drawn) as GLSL.
+std::string ClearValue(const ChannelOutput& output) {
+  const std::string type = output.glsl_type;
+  const int components = type == "vec4" ? 4 : type == "vec3" ? 3 : type == "vec2" ? 2 : 1;
+  std::string value = type + "(";
+  for (int c = 0; c < components; ++c) {
+    if (c > 0) value += ", ";
+    if (output.integer) {
+      value += std::to_string(output.clear_integer[static_cast<std::size_t>(c)]) + "u";
+    } else if (std::isinf(output.clear_float[static_cast<std::size_t>(c)])) {
+      value += "uintBitsToFloat(0x7f800000u)";
+    } else {
+      value += std::to_string(output.clear_float[static_cast<std::size_t>(c)]);
+    }
+  }
+  return value + ")";
+}
+
 std::string FragmentShader(PlaneSet through, PlaneSet inputs, uint32_t variant) {
   std::string defines = "#version 330 core\n";
   if (variant & kLens) defines += "#define LENS\n";
@@ -135,14 +153,19 @@ std::string FragmentShader(PlaneSet through, PlaneSet inputs, uint32_t variant) 
     if ((through & bit) == 0) continue;
     declarations += "layout(location = " + std::to_string(i) + ") out " + output.glsl_type + " " + out + ";\n";
     const std::string fetched = "texelFetch(" + sampler + ", t, 0)" + Swizzle(output.glsl_type);
+    // Past a lens's fold the image is black and holds nothing (lens.h).
+    const std::string outside = (variant & kLens) ? "  if (!inside) " + out + " = " +
+                                                        (i == kRgbPlane ? "vec4(0.0, 0.0, 0.0, 1.0)" : ClearValue(output)) +
+                                                        ";\n"
+                                                  : "";
     if (i == kRgbPlane) {
-      body += "  " + out + " = vec4(Rgb(q, t), 1.0);\n";
+      body += "  " + out + " = vec4(Rgb(q, t), 1.0);\n" + outside;
     } else if (i == kFlowPlane && (variant & kLens)) {
       // Flow says where the point was in the previous frame's render: map that place through the lens too.
       body += "  vec2 flow = " + fetched + " / u_truth_scale;\n  " + out +
-              " = any(isnan(flow)) ? flow : p - DistortPixel(q - flow);\n";
+              " = any(isnan(flow)) ? flow : p - DistortPixel(q - flow);\n" + outside;
     } else {
-      body += "  " + out + " = " + fetched + ";\n";
+      body += "  " + out + " = " + fetched + ";\n" + outside;
     }
   }
   return defines + declarations + kFunctions + R"(
@@ -150,6 +173,8 @@ void main() {
   vec2 p = gl_FragCoord.xy;
 #ifdef LENS
   vec2 q = texelFetch(u_lens_map, ivec2(p), 0).xy;
+  bool inside = q.x >= 0.0;
+  q = max(q, vec2(0.5));  // past the fold: any texel, overwritten below
 #else
   vec2 q = p;
 #endif

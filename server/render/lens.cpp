@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
-#include "server/common/check.h"
 #include "server/render/projection.h"
 
 namespace sim4cv::render {
@@ -16,15 +16,16 @@ LensMap MakeLensMap(const CameraView& view) {
   // First the undistorted normalised point of every pixel centre, then the
   // widening that keeps the farthest of them half a pixel inside the render.
   double reach = 0.0;
+  const double fold = effects::FoldRadius(view.effects.k1, view.effects.k2, view.effects.k3);
   for (uint32_t row = 0; row < view.height; ++row) {
     for (uint32_t column = 0; column < view.width; ++column) {
       double x = 0, y = 0;
-      const bool found =
-          effects::Undistort(view.effects, (column + 0.5 - k.cx) / k.fx, (row + 0.5 - k.cy) / k.fy, x, y);
-      // effects::Check refuses lenses that fold inside kLensCheckRadius.
-      SIM4CV_THROW_UNLESS(found, "the lens " << effects::Describe(view.effects) << " cannot be inverted at pixel "
-                                             << column << "," << row);
       const std::size_t i = 2 * (static_cast<std::size_t>(row) * view.width + column);
+      if (!effects::Undistort(view.effects, (column + 0.5 - k.cx) / k.fx, (row + 0.5 - k.cy) / k.fy, x, y) ||
+          std::hypot(x, y) >= fold) {
+        map.source[i] = map.source[i + 1] = std::numeric_limits<float>::quiet_NaN();  // past the fold
+        continue;
+      }
       map.source[i] = static_cast<float>(x);
       map.source[i + 1] = static_cast<float>(y);
       reach = std::max({reach, std::abs(x) * k.fx / (k.cx - 0.5), std::abs(y) * k.fy / (k.cy - 0.5)});
@@ -33,6 +34,10 @@ LensMap MakeLensMap(const CameraView& view) {
   map.widening = static_cast<float>(reach);
   const double fx = k.fx / reach, fy = k.fy / reach;
   for (std::size_t i = 0; i < map.source.size(); i += 2) {
+    if (std::isnan(map.source[i])) {
+      map.source[i] = map.source[i + 1] = -1.0f;
+      continue;
+    }
     map.source[i] = static_cast<float>(map.source[i] * fx + k.cx);
     map.source[i + 1] = static_cast<float>(map.source[i + 1] * fy + k.cy);
   }

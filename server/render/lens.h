@@ -18,7 +18,8 @@ struct LensMap {
   // tan(fov/2) is this times the camera's): > 1 when the lens sees more.
   float widening = 1.0f;
   // Per pixel of the distorted image, top row first: the continuous pixel
-  // position (column, row; centres at +0.5) in the pinhole render that it shows.
+  // position (column, row; centres at +0.5) in the pinhole render that it
+  // shows, or (-1, -1) past the lens's fold (effects::kLensCheckRadius).
   std::vector<float> source;  // 2 * width * height
 };
 

@@ -177,3 +177,26 @@ def test_conditions_change_rgb_only_and_bad_ones_are_refused(connect):
     randomised = client.set_conditions(randomize_seed=5).conditions
     assert randomised.randomize_seed == 5 and randomised.variation != 0
     assert client.reset().conditions.variation != randomised.variation, "a new episode draws new conditions"
+
+
+def test_camera_effects_keep_the_boxes_on_the_mask_and_bad_ones_are_refused(connect):
+    client = connect("effects")
+    client.subscribe("uav", ["rgb", "mask", "boxes"], "lockstep")
+    plain = client.step_and_receive()
+    world = client.set_effects(k1=-0.2, k2=0.03, jpeg_quality=70, antialias=1)
+    assert (world.effects.k1, world.effects.jpeg_quality, world.effects.white_balance_k) == (-0.2, 70, 6500)
+    client.reset()
+    lensed = client.step_and_receive()
+    assert lensed.frame_id == plain.frame_id
+    assert lensed.camera_intrinsics.k1 == -0.2 and lensed.camera_intrinsics.k2 == 0.03
+    mask = image_array(lensed, "mask")
+    assert mask.tobytes() != image_array(plain, "mask").tobytes(), "the lens bends the mask"
+    assert lensed.boxes, "something labelled in view"
+    for box in lensed.boxes:  # every box is the tight box of its object's pixels
+        rows, columns = (mask == box.object_id).nonzero()
+        assert (box.x, box.y) == (columns.min(), rows.min())
+        assert (box.x + box.width, box.y + box.height) == (columns.max() + 1, rows.max() + 1)
+    refused(lambda: client.set_effects(motion_blur=1.5), pb.ERROR_CODE_INVALID_ARGUMENT,
+            "SetEffects.motion_blur 1.5 is outside 0..1 frames")
+    refused(lambda: client.set_effects(k1=-0.9), pb.ERROR_CODE_INVALID_ARGUMENT, "folds the image")
+    assert client.get_world().effects.k1 == -0.2, "nothing changed"

@@ -81,7 +81,7 @@ TEST(EffectsTableTest, BadValuesAreNamedWithTheirRange) {
   EXPECT_EQ(effects::Check(e, true), "--white-balance 1000 is outside 2000..12000 K");
   e = {};
   e.k1 = -0.9;
-  EXPECT_EQ(effects::Check(e, true).rfind("the lens k1=-0.9 k2=0 k3=0 folds the image at ", 0), 0u)
+  EXPECT_EQ(effects::Check(e, true).rfind("the lens k1=-0.9 k2=0 k3=0 folds the image at radius 0.40", 0), 0u)
       << effects::Check(e, true);
   EXPECT_EQ(effects::Check(Lens(), true), "");
   e = {};
@@ -479,6 +479,28 @@ TEST_F(EffectsRenderTest, DistortedBoxesMatchOpenCvsModelWithinHalfAPixel) {
     std::printf("reference at %ux: %d box edges, %d moved (mean %.3f px), worst %.0f px\n", scale, edges, moved, mean,
                 worst);
   }
+}
+
+// A lens whose fold lies inside a wide camera's view: past the fold the
+// image is black and holds nothing, and rendering goes on.
+TEST_F(EffectsRenderTest, PixelsPastALensesFoldAreEmpty) {
+  effects::CameraEffects lens;
+  lens.k1 = -0.5;  // folds at 0.54 (tan of the angle): inside a 40-degree view's corners
+  ASSERT_EQ(effects::Check(lens, true), "");
+  CameraView view = View(1, lens);
+  view.fov_y_deg = 40.0f;
+  const LensMap map = MakeLensMap(view);
+  const Shot shot = Render(view);
+  std::size_t past = 0;
+  for (std::size_t p = 0; p < shot.frame.depth.size(); ++p) {
+    if (map.source[2 * p] >= 0) continue;
+    ++past;
+    EXPECT_EQ(shot.frame.mask[p], 0);
+    EXPECT_TRUE(std::isinf(shot.frame.depth[p]));
+    EXPECT_EQ(shot.frame.rgb[3 * p], 0);
+  }
+  EXPECT_GT(past, 100u) << "the corners lie past the fold";
+  EXPECT_LT(past, shot.frame.depth.size() / 2);
 }
 
 TEST_F(EffectsRenderTest, FlowThroughALensIsInDistortedPixels) {

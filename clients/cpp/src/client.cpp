@@ -211,6 +211,12 @@ proto::WorldInfo Client::Reset() { return ConfigureWorld(detail::ResetRequest())
 
 proto::WorldInfo Client::GetWorld() { return ConfigureWorld(detail::GetWorldRequest()); }
 
+proto::WorldInfo Client::SetEffects(const proto::CameraEffects& effects) {
+  proto::Configure request;
+  *request.mutable_set_effects() = effects;
+  return ConfigureWorld(std::move(request));
+}
+
 proto::WorldInfo Client::SetConditions(const std::string& preset, std::optional<double> hour,
                                        const std::string& quality) {
   return ConfigureWorld(detail::SetConditionsRequest(preset, hour, quality));

@@ -77,6 +77,17 @@ class WorldRequests:
             request.hour = hour
         return self._configure_world(set_conditions=request)
 
+    def set_effects(self, **effects):
+        """Camera effects from the next frame on (docs/protocol.md, "Camera
+        effects"): keyword arguments named as CameraEffects' fields, e.g.
+        set_effects(k1=-0.2, motion_blur=0.5, jpeg_quality=80, antialias=1,
+        exposure_ev=0.5, white_balance_k=4000); the others keep their value.
+        A lens (k1, k2, p1, p2, k3; OpenCV's model, also in every frame's
+        camera_intrinsics) distorts every channel and the boxes alike; the
+        other effects change RGB only. Returns the WorldInfo, whose .effects
+        says what is in force."""
+        return self._configure_world(set_effects=pb.CameraEffects(**effects))
+
     def set_speed(self, entity_id, speed):
         """Keeps the car's route and changes its speed; 0 stops it."""
         return self._configure_world(set_route=pb.SetRoute(entity_id=entity_id, keep_route=True, speed=speed))

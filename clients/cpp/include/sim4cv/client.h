@@ -169,6 +169,11 @@ class Client {
   // "full" or "fast" ("": keep). Other channels never change with them.
   proto::WorldInfo SetConditions(const std::string& preset, std::optional<double> hour = std::nullopt,
                                  const std::string& quality = "");
+  // Camera effects (lens distortion, motion blur, anti-aliasing, exposure,
+  // white balance, JPEG; docs/protocol.md "Camera effects"): the fields set
+  // in `effects` change, the others keep their value; WorldInfo.effects
+  // says what is in force. A lens distorts every channel and the boxes.
+  proto::WorldInfo SetEffects(const proto::CameraEffects& effects);
   // Map scenes only: the nearest lane point to (x, y) (only lanes within 90
   // degrees of `heading_deg` if given), and `count` points every `step`
   // metres ahead of it.
