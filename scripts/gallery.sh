@@ -19,6 +19,7 @@ seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { print (b - a) / 1e9 }'
 
 views="uav car_front car_chase walkers"
 looks="fast $(sed -n 's/^ *X(\([A-Z_]*\), "\([a-z_]*\)".*/\2/p' protocol/conditions.h | tr '\n' ' ') noise randomised_0 randomised_1 randomised_2"
+looks="$looks antialias exposure_plus_1ev white_balance_3200k motion_blur lens jpeg_15 action_camera"
 {
   echo "# Gallery"
   echo
@@ -27,10 +28,17 @@ looks="fast $(sed -n 's/^ *X(\([A-Z_]*\), "\([a-z_]*\)".*/\2/p' protocol/conditi
   echo "the start, 320x180. Rows: the flat look of \`--quality fast\` (what every frame looked like before"
   echo "the look existed), then each \`--conditions\` preset at its own hour (protocol/conditions.h),"
   echo "then clear_noon with sensor noise (\`--noise-read 3 --noise-shot 1.5\`) and three draws of domain"
-  echo "randomisation (\`--randomize 2026\`: draws 0, 1, 2)."
+  echo "randomisation (\`--randomize 2026\`: draws 0, 1, 2). Then clear_noon through each camera effect"
+  echo "(protocol/effects.h, docs/protocol.md \"Camera effects\"): \`--antialias 1\`, \`--exposure-ev 1\`,"
+  echo "\`--white-balance 3200\` (a camera set for tungsten light, in daylight), \`--motion-blur 1\`"
+  echo "(a shutter open the whole 1/30 s frame; the flow is from the frame before), a wide-angle lens"
+  echo "(\`--lens-k1 -0.28 --lens-k2 0.07 --lens-p1 0.002 --lens-p2 -0.0015 --lens-k3 -0.005\`),"
+  echo "\`--jpeg 15\`, and a cheap action camera: that lens, \`--motion-blur 0.5\`, sensor noise,"
+  echo "\`--antialias 1 --jpeg 60\`."
   echo "Columns: the UAV chasing the target car, the car's first-person camera, the chase camera, an"
   echo "eye-level camera by a walker. Depth, masks, boxes, semantic labels, normals and flow are the"
-  echo "same in every row (tests/unit/look_test.cpp)."
+  echo "same in every row but the lens rows (tests/unit/look_test.cpp, effects_test.cpp); through the lens"
+  echo "they are distorted exactly as the RGB is."
   echo
   echo "| look | $(echo $views | sed 's/ / | /g') |"
   echo "|---|$(for _ in $views; do printf -- '---|'; done)"

@@ -1,6 +1,6 @@
 // Renders the gallery (docs/gallery.md): the same views of one moment of a
-// map with traffic, in the flat look of --quality fast and in every
-// conditions preset, as PNGs. In-process (no daemon): a frame is a pure
+// map with traffic, in the flat look of --quality fast, in every conditions
+// preset and with each camera effect, as PNGs. In-process (no daemon): a frame is a pure
 // function of the world state, the camera and the conditions.
 //   sim4cv_gallery --out DIR [--map FILE] [--width W] [--height H] [--steps N]
 #include <cmath>
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "protocol/conditions.h"
+#include "protocol/effects.h"
 #include "server/render/camera_math.h"
 #include "server/render/gl_context.h"
 #include "server/render/renderer.h"
@@ -57,11 +58,19 @@ int main(int argc, char** argv) try {
   sim::AddTraffic(scene, traffic);
   sim::World world(scene);
   sim::State state = world.InitialState();
-  for (int i = 0; i < steps; ++i) world.Step(state, 1.0 / 240.0);
+  // One frame (1/30 s) before the moment shown: where things were, for the
+  // flow that motion blur smears along.
+  constexpr int kFrameSteps = 8;
+  for (int i = 0; i < steps - kFrameSteps; ++i) world.Step(state, 1.0 / 240.0);
+  const sim::State before = state;
+  for (int i = 0; i < kFrameSteps; ++i) world.Step(state, 1.0 / 240.0);
 
   auto gl = render::CreateOsMesaContext();
   gl->MakeCurrent();
   render::SceneGraphics graphics(scene);
+  graphics.Update(before);
+  std::vector<render::CameraView> previous;
+  for (const sim::CameraSpec& camera : scene.cameras) previous.push_back(graphics.CameraAt(camera, before));
   graphics.Update(state);
   render::Renderer renderer(graphics.meshes(), width, height);
   renderer.SetLamps(graphics.lamps());
@@ -84,11 +93,16 @@ int main(int argc, char** argv) try {
     break;
   }
   std::vector<cv::Mat> rows;  // one per look, the views side by side: sheet.png
-  const auto render_all = [&](const std::string& look_name, const render::Look& look) {
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    views[i].second.previous_world_from_camera =
+        i < previous.size() ? previous[i].world_from_camera : views[i].second.world_from_camera;  // the walker cam stands
+  }
+  const auto render_all = [&](const std::string& look_name, const render::Look& look,
+                              const effects::CameraEffects& camera_effects = {}) {
     renderer.SetLook(look);
     std::vector<cv::Mat> row;
     for (auto& [name, view] : views) {
-      view.previous_world_from_camera = view.world_from_camera;
+      view.effects = camera_effects;
       renderer.Render(view, graphics.draw_items(), buffers, {});
       const auto path = out / (name + "_" + look_name + ".png");
       row.push_back(Save(path, rgb, width, height));
@@ -109,6 +123,36 @@ int main(int argc, char** argv) try {
   for (uint64_t draw = 0; draw < 3; ++draw) {
     render_all("randomised_" + std::to_string(draw), render::LookOf(conditions::Randomized(2026, draw, {})));
   }
+  const render::Look noon = render::LookOf(conditions::Of(conditions::Preset::CLEAR_NOON));
+  effects::CameraEffects e;
+  e.antialias = 1;
+  render_all("antialias", noon, e);
+  e = {};
+  e.exposure_ev = 1;
+  render_all("exposure_plus_1ev", noon, e);
+  e = {};
+  e.white_balance_k = 3200;
+  render_all("white_balance_3200k", noon, e);
+  e = {};
+  e.motion_blur = 1;
+  render_all("motion_blur", noon, e);
+  e = {};
+  e.k1 = -0.28;
+  e.k2 = 0.07;
+  e.p1 = 0.002;
+  e.p2 = -0.0015;
+  e.k3 = -0.005;
+  render_all("lens", noon, e);
+  effects::CameraEffects lens = e;
+  e = {};
+  e.jpeg_quality = 15;
+  render_all("jpeg_15", noon, e);
+  // A cheap action camera: lens, half-frame shutter, sensor noise, JPEG.
+  e = lens;
+  e.motion_blur = 0.5;
+  e.jpeg_quality = 60;
+  e.antialias = 1;
+  render_all("action_camera", render::LookOf(noisy), e);
   cv::Mat sheet;
   cv::vconcat(rows, sheet);
   cv::imwrite((out / "sheet.png").string(), sheet);
