@@ -7,6 +7,7 @@
 //      then each further channel's added cost (protocol/channels.h), and RGB alone.
 //   4. the cost of the look (look.h): rgb+depth+mask with --quality fast, then full without
 //      shadows, then full (the default), then full with sensor noise, in the conditions asked for.
+//   5. the cost of each camera effect (protocol/effects.h) on top of that look, and of all at once.
 //   sim4cv_bench_sim_render [--map FILE] [--width W] [--height H] [--steps N] [--frames N]
 //                           [--traffic-cars N] [--traffic-parked N] [--traffic-pedestrians N] [--traffic-lights on|off]
 //                           [--conditions PRESET] [--quality full|fast]
@@ -19,6 +20,7 @@
 #include "bench/stats.h"
 #include "protocol/channels.h"
 #include "protocol/conditions.h"
+#include "protocol/effects.h"
 #include "server/render/gl_context.h"
 #include "server/render/ground_truth.h"
 #include "server/render/renderer.h"
@@ -87,6 +89,7 @@ struct RenderTimer {
       graphics.Update(state);
       render::CameraView view = graphics.CameraAt(camera, state);
       view.previous_world_from_camera = previous.world_from_camera;
+      view.effects = effects;
       renderer.Render(view, graphics.draw_items(), buffers, unoccluded);
       if (boxes) {
         auto& labelled = graphics.labelled_objects();
@@ -99,6 +102,7 @@ struct RenderTimer {
     return bench::Summarize(frame_ms);
   }
   const sim::CameraSpec& scene_camera;
+  effects::CameraEffects effects = {};  // of every frame
 };
 
 }  // namespace
@@ -186,6 +190,41 @@ int main(int argc, char** argv) {
     renderer.SetLook(variant);
     const bench::Summary timed = timer.Run(kBaseChannels);
     std::printf("look: %-16s rgb,depth,mask median %.3f ms, p99 %.3f ms\n", name, timed.median, timed.p99);
+  }
+
+  // What each camera effect adds to the look asked for (rgb,depth,mask and boxes).
+  renderer.SetLook(look);
+  const bench::Summary plain = timer.Run(kBaseChannels);
+  std::printf("effects: none            median %.3f ms, p99 %.3f ms\n", plain.median, plain.p99);
+  effects::CameraEffects lens;
+  lens.k1 = -0.28;
+  lens.k2 = 0.07;
+  lens.p1 = 0.002;
+  lens.p2 = -0.0015;
+  lens.k3 = -0.005;
+  std::vector<std::pair<std::string, effects::CameraEffects>> cases;
+  const auto add = [&](const char* name, double effects::CameraEffects::*field, double value) {
+    effects::CameraEffects e;
+    e.*field = value;
+    cases.emplace_back(name, e);
+  };
+  add("antialias", &effects::CameraEffects::antialias, 1);
+  add("exposure+wb", &effects::CameraEffects::white_balance_k, 4000);
+  cases.back().second.exposure_ev = 0.5;
+  add("motion blur", &effects::CameraEffects::motion_blur, 1);
+  cases.emplace_back("lens", lens);
+  add("jpeg 60", &effects::CameraEffects::jpeg_quality, 60);
+  effects::CameraEffects all = lens;
+  all.antialias = 1;
+  all.motion_blur = 0.5;
+  all.white_balance_k = 4000;
+  all.jpeg_quality = 60;
+  cases.emplace_back("all", all);
+  for (const auto& [name, camera_effects] : cases) {
+    timer.effects = camera_effects;
+    const bench::Summary timed = timer.Run(kBaseChannels);
+    std::printf("effects: %-15s median %.3f ms (%+.3f ms), p99 %.3f ms\n", name.c_str(), timed.median,
+                timed.median - plain.median, timed.p99);
   }
   return 0;
 }
