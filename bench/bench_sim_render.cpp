@@ -67,7 +67,17 @@ struct RenderTimer {
   render::Renderer& renderer;
   uint32_t width, height;
 
-  bench::Summary Run(channels::ChannelSet set) {
+  // A look and camera effects to render the frames in.
+  struct Variant {
+    render::Look look;
+    effects::CameraEffects effects;
+  };
+
+  bench::Summary Run(channels::ChannelSet set) { return Interleaved(set, {{look, {}}}).front(); }
+
+  // Each frame rendered once per entry of `variants` in turn, so that the
+  // machine's drift (a noisy neighbour, the clock) weighs on all alike.
+  std::vector<bench::Summary> Interleaved(channels::ChannelSet set, const std::vector<Variant>& variants) {
     std::array<std::vector<uint8_t>, channels::kPixelChannelCount> planes;
     render::FrameBuffers buffers{};
     for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
@@ -80,29 +90,39 @@ struct RenderTimer {
     std::vector<uint32_t> unoccluded(boxes ? graphics.instance_id_bound() : 0);
     std::vector<render::GroundTruthBox> found;
     render::BoxExtractor extractor;
-    std::vector<double> frame_ms;
-    frame_ms.reserve(states.size());
+    std::vector<std::vector<double>> frame_ms(variants.size());
+    for (auto& times : frame_ms) times.reserve(states.size());
     const sim::CameraSpec& camera = scene_camera;
     render::CameraView previous = graphics.CameraAt(camera, states.front());
     for (const sim::State& state : states) {
-      const auto start = Clock::now();
+      // Updating the graphics is part of every frame's cost; it is done once
+      // (a second Update would make this state its own previous one).
+      const auto update_start = Clock::now();
       graphics.Update(state);
+      renderer.SetHeadlights(graphics.headlights());
       render::CameraView view = graphics.CameraAt(camera, state);
       view.previous_world_from_camera = previous.world_from_camera;
-      view.effects = effects;
-      renderer.Render(view, graphics.draw_items(), buffers, unoccluded);
-      if (boxes) {
-        auto& labelled = graphics.labelled_objects();
-        for (auto& object : labelled) object.unoccluded_pixels = unoccluded[object.instance];
-        extractor.Extract(mask, width, height, labelled, found);
+      const auto update = Clock::now() - update_start;
+      for (std::size_t v = 0; v < variants.size(); ++v) {
+        const auto start = Clock::now() - update;
+        renderer.SetLook(variants[v].look);
+        view.effects = variants[v].effects;
+        renderer.Render(view, graphics.draw_items(), buffers, unoccluded);
+        if (boxes) {
+          auto& labelled = graphics.labelled_objects();
+          for (auto& object : labelled) object.unoccluded_pixels = unoccluded[object.instance];
+          extractor.Extract(mask, width, height, labelled, found);
+        }
+        frame_ms[v].push_back(Seconds(Clock::now() - start) * 1e3);
       }
-      frame_ms.push_back(Seconds(Clock::now() - start) * 1e3);
       previous = view;
     }
-    return bench::Summarize(frame_ms);
+    std::vector<bench::Summary> summaries;
+    for (const auto& times : frame_ms) summaries.push_back(bench::Summarize(times));
+    return summaries;
   }
   const sim::CameraSpec& scene_camera;
-  effects::CameraEffects effects = {};  // of every frame
+  render::Look look;  // of Run
 };
 
 }  // namespace
@@ -159,7 +179,7 @@ int main(int argc, char** argv) {
     for (int s = 0; s < 8; ++s) world.Step(state, kDt);  // the scene moves as it does at 30 Hz
     states.push_back(state);
   }
-  RenderTimer timer{states, graphics, renderer, width, height, scene.cameras[0]};
+  RenderTimer timer{states, graphics, renderer, width, height, scene.cameras[0], look};
   const bench::Summary base = timer.Run(kBaseChannels);
   std::printf("render: %d frames (rgb,depth,mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: "
               "%.0f fps\n",
@@ -185,17 +205,17 @@ int main(int argc, char** argv) {
   render::Look noisy = full;
   noisy.noise_read = 3.0f;
   noisy.noise_shot = 1.5f;
-  for (const auto& [name, variant] : {std::pair{"fast", fast}, std::pair{"full, no shadows", unshadowed},
-                                      std::pair{"full", full}, std::pair{"full + noise", noisy}}) {
-    renderer.SetLook(variant);
-    const bench::Summary timed = timer.Run(kBaseChannels);
-    std::printf("look: %-16s rgb,depth,mask median %.3f ms, p99 %.3f ms\n", name, timed.median, timed.p99);
+  // Interleaved frame by frame, as below.
+  const std::vector<bench::Summary> looks =
+      timer.Interleaved(kBaseChannels, {{fast, {}}, {unshadowed, {}}, {full, {}}, {noisy, {}}});
+  const char* look_names[] = {"fast", "full, no shadows", "full", "full + noise"};
+  for (std::size_t i = 0; i < looks.size(); ++i) {
+    std::printf("look: %-16s rgb,depth,mask median %.3f ms, p99 %.3f ms\n", look_names[i], looks[i].median,
+                looks[i].p99);
   }
 
-  // What each camera effect adds to the look asked for (rgb,depth,mask and boxes).
-  renderer.SetLook(look);
-  const bench::Summary plain = timer.Run(kBaseChannels);
-  std::printf("effects: none            median %.3f ms, p99 %.3f ms\n", plain.median, plain.p99);
+  // What each camera effect adds to the look asked for (rgb,depth,mask and
+  // boxes): every frame rendered without effects, then with each, in turn.
   effects::CameraEffects lens;
   lens.k1 = -0.28;
   lens.k2 = 0.07;
@@ -220,11 +240,13 @@ int main(int argc, char** argv) {
   all.white_balance_k = 4000;
   all.jpeg_quality = 60;
   cases.emplace_back("all", all);
-  for (const auto& [name, camera_effects] : cases) {
-    timer.effects = camera_effects;
-    const bench::Summary timed = timer.Run(kBaseChannels);
-    std::printf("effects: %-15s median %.3f ms (%+.3f ms), p99 %.3f ms\n", name.c_str(), timed.median,
-                timed.median - plain.median, timed.p99);
+  std::vector<RenderTimer::Variant> variants = {{look, {}}};
+  for (const auto& entry : cases) variants.push_back({look, entry.second});
+  const std::vector<bench::Summary> timed = timer.Interleaved(kBaseChannels, variants);
+  std::printf("effects: %-15s median %.3f ms, p99 %.3f ms\n", "none", timed[0].median, timed[0].p99);
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    std::printf("effects: %-15s median %.3f ms (%+.3f ms), p99 %.3f ms\n", cases[i].first.c_str(), timed[i + 1].median,
+                timed[i + 1].median - timed[0].median, timed[i + 1].p99);
   }
   return 0;
 }

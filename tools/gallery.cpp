@@ -74,6 +74,7 @@ int main(int argc, char** argv) try {
   graphics.Update(state);
   render::Renderer renderer(graphics.meshes(), width, height);
   renderer.SetLamps(graphics.lamps());
+  renderer.SetHeadlights(graphics.headlights());
   std::vector<uint8_t> rgb(std::size_t{width} * height * 3);
   render::FrameBuffers buffers{};
   buffers[*channels::IndexOf(proto::CHANNEL_RGB)] = rgb.data();

@@ -61,7 +61,10 @@ void FrameAssembler::Release() {
   graphics_.reset();
 }
 
-void FrameAssembler::Update(const sim::State& state) { graphics_->Update(state); }
+void FrameAssembler::Update(const sim::State& state) {
+  graphics_->Update(state);
+  renderer_->SetHeadlights(graphics_->headlights());
+}
 
 void FrameAssembler::RememberViews(const std::vector<sim::CameraSpec>& cameras, const sim::State& state) {
   for (uint32_t camera = 0; camera < cameras.size(); ++camera) {

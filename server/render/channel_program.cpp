@@ -94,6 +94,9 @@ ChannelProgram::ChannelProgram(PlaneSet planes, uint32_t look) : planes_(planes)
   this->look.Locate(program_);
   u_lamps = locate("u_lamps");
   u_lamp_count = locate("u_lamp_count");
+  u_headlights = locate("u_headlights");
+  u_headlight_directions = locate("u_headlight_directions");
+  u_headlight_count = locate("u_headlight_count");
 }
 
 ChannelProgram::~ChannelProgram() { glDeleteProgram(program_); }

@@ -175,6 +175,7 @@ CarProfile ProfileOf(CarStyle style) {
     case CarStyle::kSuv: return {0.62f, -0.46f, 0.22f};
     case CarStyle::kVan: return {0.6f, -0.49f, 0.36f};
     case CarStyle::kPickup: return {0.6f, -0.08f, 0.22f};
+    case CarStyle::kTruck: return {0.55f, 0.2f, 0.46f};
   }
   return {0.55f, -0.46f, 0.15f};
 }
@@ -213,6 +214,11 @@ Mesh MakeCarMesh(float length, float width, float height, const Eigen::Vector3f&
             {0.5f * (front - rear), 0.43f * width, 0.5f * (roof_bottom - shoulder)}, glass);
   AppendBox(mesh, {0.5f * (rear + front), 0.0f, 0.5f * (roof_bottom + at(1.0f))},
             {0.5f * (front - rear) - 0.01f * length, 0.45f * width, 0.5f * (at(1.0f) - roof_bottom)}, color);
+  if (style == CarStyle::kTruck) {  // the cargo box behind the cab, up to the top of the bounds
+    const float box_rear = -0.5f * length + 2.0f * lamp_half.x(), box_front = rear - 0.02f * length;
+    AppendBox(mesh, {0.5f * (box_rear + box_front), 0.0f, 0.5f * (shoulder + at(1.0f))},
+              {0.5f * (box_front - box_rear), 0.5f * width, 0.5f * (at(1.0f) - shoulder)}, {0.86f, 0.86f, 0.84f});
+  }
   const float lamp_z = at(profile.shoulder - 0.12f);
   const std::size_t first_lamp = mesh.vertices.size();
   for (float y : {-0.33f * width, 0.33f * width}) {

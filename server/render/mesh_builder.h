@@ -25,9 +25,10 @@ Mesh MakeRoadLoop(const std::vector<Eigen::Vector2f>& closed_centerline, float l
                   const Eigen::Vector3f& asphalt, const Eigen::Vector3f& marking);
 
 // Body styles of cars; every style fills the same bounds, so one physics box
-// and one 3D box serve all of them.
-enum class CarStyle { kSedan, kHatchback, kEstate, kSuv, kVan, kPickup };
-inline constexpr int kCarStyleCount = 6;
+// and one 3D box serve all of them (the truck is a light box truck: a cab
+// and a white cargo box as tall as the bounds).
+enum class CarStyle { kSedan, kHatchback, kEstate, kSuv, kVan, kPickup, kTruck };
+inline constexpr int kCarStyleCount = 7;
 
 // A car: wheels, painted body, glasshouse and roof, head- and tail-lamps,
 // x forward. Its bounds are exactly [-length/2, length/2] x [-width/2,

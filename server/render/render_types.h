@@ -53,6 +53,13 @@ inline void MarkEmissive(Mesh& mesh, std::size_t first) {
   for (std::size_t i = first; i < mesh.vertices.size(); ++i) mesh.vertices[i].semantic |= kEmissive;
 }
 
+// A car's headlights as one spot light: where it shines from and where to
+// (world, unit), for the look's night lights.
+struct Headlight {
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();
+  Eigen::Vector3f direction = Eigen::Vector3f::UnitX();
+};
+
 // Index into the mesh list the Renderer was built with.
 using MeshId = uint32_t;
 

@@ -112,6 +112,10 @@ struct Renderer::Impl {
   std::array<Eigen::Vector3f, kMaxLamps> nearest_lamps;
   // Fills nearest_lamps with the lamps nearest `point`; how many.
   int NearestLamps(const Eigen::Vector3f& point);
+  std::vector<Headlight> headlights;  // this frame's cars
+  std::array<Eigen::Vector3f, kMaxHeadlights> nearest_headlights, nearest_directions;
+  // Fills nearest_headlights/_directions with the cars' nearest `point`; how many.
+  int NearestHeadlights(const Eigen::Vector3f& point);
   // Made the first time the full look draws RGB (with shadows, for the map).
   std::unique_ptr<ShadowMap> shadow_map;
   std::unique_ptr<SkyPass> sky;
@@ -313,6 +317,10 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
     const int count = NearestLamps(ahead);
     glUniform3fv(program->u_lamps, count, nearest_lamps[0].data());
     glUniform1i(program->u_lamp_count, count);
+    const int cars = NearestHeadlights(ahead);
+    glUniform3fv(program->u_headlights, cars, nearest_headlights[0].data());
+    glUniform3fv(program->u_headlight_directions, cars, nearest_directions[0].data());
+    glUniform1i(program->u_headlight_count, cars);
   }
   DrawScene(items, FrustumPlanes(pass.projection * pass.view), unoccluded_pixels);
   if (full_rgb) {
@@ -328,6 +336,21 @@ int Renderer::Impl::NearestLamps(const Eigen::Vector3f& point) {
   const auto count = static_cast<int>(std::min<std::size_t>(lamp_order.size(), kMaxLamps));
   std::partial_sort(lamp_order.begin(), lamp_order.begin() + count, lamp_order.end());
   for (int i = 0; i < count; ++i) nearest_lamps[static_cast<std::size_t>(i)] = lamps[lamp_order[static_cast<std::size_t>(i)].second];
+  return count;
+}
+
+int Renderer::Impl::NearestHeadlights(const Eigen::Vector3f& point) {
+  lamp_order.clear();
+  for (uint32_t i = 0; i < headlights.size(); ++i) {
+    lamp_order.emplace_back((headlights[i].position - point).squaredNorm(), i);
+  }
+  const auto count = static_cast<int>(std::min<std::size_t>(lamp_order.size(), kMaxHeadlights));
+  std::partial_sort(lamp_order.begin(), lamp_order.begin() + count, lamp_order.end());
+  for (int i = 0; i < count; ++i) {
+    const Headlight& car = headlights[lamp_order[static_cast<std::size_t>(i)].second];
+    nearest_headlights[static_cast<std::size_t>(i)] = car.position;
+    nearest_directions[static_cast<std::size_t>(i)] = car.direction;
+  }
   return count;
 }
 
@@ -452,6 +475,11 @@ void Renderer::SetLamps(std::vector<Eigen::Vector3f> lamps) {
   impl_->lamp_order.reserve(impl_->lamps.size());  // no allocation per frame
 }
 
+void Renderer::SetHeadlights(std::span<const Headlight> headlights) {
+  impl_->headlights.assign(headlights.begin(), headlights.end());
+  if (impl_->lamp_order.capacity() < headlights.size()) impl_->lamp_order.reserve(headlights.size());
+}
+
 void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
                       std::span<uint32_t> unoccluded_pixels) {
   Impl& gl = *impl_;
@@ -491,7 +519,7 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   if (full_rgb) {
     rgb_look = ChannelProgram::kFull | (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
                (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u) |
-               (gl.look.lights > 0.0f && !gl.lamps.empty() ? ChannelProgram::kLamps : 0u);
+               (gl.look.lights > 0.0f && !(gl.lamps.empty() && gl.headlights.empty()) ? ChannelProgram::kLamps : 0u);
   }
   constexpr uint32_t kFineScale = 2;
   if (fine_planes != 0) {

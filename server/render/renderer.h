@@ -41,6 +41,12 @@ class Renderer {
   // point 15 m ahead of the camera (each lamp costs every pixel).
   void SetLamps(std::vector<Eigen::Vector3f> lamps);
   static constexpr int kMaxLamps = 4;
+  // The headlights of the cars that drive (SceneGraphics::headlights), set
+  // each frame: with the look's lights on, the kMaxHeadlights nearest the
+  // point 15 m ahead of the camera light the road. Copied; no allocation
+  // once the number of cars stops growing.
+  void SetHeadlights(std::span<const Headlight> headlights);
+  static constexpr int kMaxHeadlights = 2;
 
  private:
   struct Impl;

@@ -159,9 +159,20 @@ void SceneGraphics::Update(const sim::State& state) {
   }
   labelled_.insert(labelled_.end(), static_labelled_.begin(), static_labelled_.end());
   if (traffic_) traffic_->Append(state.traffic, state.sim_time, items_, labelled_, moving_);
+  // A car's lamps sit at the front of its box, at two thirds of its height,
+  // and shine a little down the road.
+  headlights_.clear();
+  for (const MovingObject& object : moving_) {
+    if (object.object_class != static_cast<uint32_t>(proto::OBJECT_CLASS_CAR)) continue;
+    const Eigen::Vector3d front = object.position + object.orientation * Eigen::Vector3d(object.half_extents.x(), 0.0,
+                                                                                         0.3 * object.half_extents.z());
+    const Eigen::Vector3d ahead = object.orientation * Eigen::Vector3d(1.0, 0.0, -0.025);
+    headlights_.push_back({front.cast<float>(), ahead.normalized().cast<float>()});
+  }
   LinkPreviousTransforms();
   // Room for the next Update's copy now, so a warm Update never allocates.
   previous_items_.reserve(items_.capacity());
+  headlights_.reserve(moving_.capacity());
 }
 
 // Items are rebuilt in the same order every frame (entities in State order,

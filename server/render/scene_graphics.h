@@ -33,6 +33,9 @@ class SceneGraphics {
   const std::vector<DrawItem>& draw_items() const { return items_; }
   // Where the scene's street lanterns shine from (world), for Renderer::SetLamps.
   const std::vector<Eigen::Vector3f>& lamps() const { return lamps_; }
+  // The headlights of every car that drives (entities and moving traffic;
+  // parked cars are off), as of the last Update, for Renderer::SetHeadlights.
+  std::span<const Headlight> headlights() const { return headlights_; }
   // Labelled objects (instance id, class) in instance-id order, as of the
   // last Update; the renderer fills in their unoccluded pixel counts.
   std::vector<LabelledObject>& labelled_objects() { return labelled_; }
@@ -62,6 +65,7 @@ class SceneGraphics {
   WalkerMeshIds walker_meshes_;
   float uav_span_ = 0.0f;
   std::vector<Eigen::Vector3f> lamps_;
+  std::vector<Headlight> headlights_;
   std::vector<LabelledObject> static_labelled_;
   std::vector<LabelledObject> labelled_;
   std::vector<MovingObject> moving_;

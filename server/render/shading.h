@@ -23,6 +23,9 @@ uniform vec2 u_noise;              // sensor noise: read sigma, shot gain, in [0
 uniform uint u_noise_seed;         // per frame and camera
 uniform vec3 u_lamps[4];           // Renderer::kMaxLamps street lanterns nearest the view (world), with SIM4CV_LAMPS
 uniform int u_lamp_count;
+uniform vec3 u_headlights[2];      // Renderer::kMaxHeadlights cars' headlights nearest the view (world)
+uniform vec3 u_headlight_directions[2];
+uniform int u_headlight_count;
 
 // Integer hashing: a few SIMD integer ops per value where a float hash
 // takes about twenty (llvmpipe pays per instruction).
@@ -230,6 +233,18 @@ vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic_and_flags, fl
     float window = max(1.0 - d2 / 324.0, 0.0);
     light += vec3(1.0, 0.78, 0.5) *
              (20.0 * u_weather.z * max(dot(n, to_lamp), 0.0) * inversesqrt(d2) * window * window / (d2 + 1.0));
+  }
+  // Headlights: cold-white beams aimed a little down the road, brightest
+  // on their axis (where the road is met at a grazing angle, 20-40 m ahead)
+  // and reaching 50 m; the near road gets the beam's dimmer edge.
+  for (int i = 0; i < u_headlight_count; ++i) {
+    vec3 to_car = u_headlights[i] - p;
+    float d2 = dot(to_car, to_car);
+    vec3 l = to_car * inversesqrt(d2);
+    float axis = -dot(l, u_headlight_directions[i]);
+    float beam = smoothstep(0.9, 0.995, axis) * (0.15 + 0.85 * smoothstep(0.97, 0.9995, axis));
+    float window = max(1.0 - d2 / 2500.0, 0.0);
+    light += vec3(1.0, 0.96, 0.88) * (40.0 * u_weather.z * max(dot(n, l), 0.0) * beam * window * window / (1.0 + 0.02 * d2));
   }
 #endif
   // Lamps and headlights (kEmissive) glow with their own colour at night.

@@ -294,6 +294,32 @@ TEST_F(LookRenderTest, StreetLanternsLightTheRoadAtNightOnly) {
   EXPECT_EQ(lit_against_unlit(conditions::Of(Preset::CLEAR_NOON)), 0.0) << "off by day";
 }
 
+// The target car's own headlights light the road ahead of its first-person
+// camera at night, and nothing by day; no other channel changes.
+TEST_F(LookRenderTest, HeadlightsLightTheRoadAheadAtNightOnly) {
+  ASSERT_FALSE(graphics_->headlights().empty());
+  const auto lit_against_dark = [](const conditions::Conditions& conditions) {
+    renderer_->SetHeadlights(graphics_->headlights());
+    const Shot lit = Render(1, conditions);  // car_front
+    renderer_->SetHeadlights({});
+    const Shot dark = Render(1, conditions);
+    EXPECT_TRUE(SameBytes(lit.frame.depth, dark.frame.depth));
+    EXPECT_TRUE(SameBytes(lit.frame.mask, dark.frame.mask));
+    // The road straight ahead: the middle third of the image's lower half.
+    double lit_road = 0, dark_road = 0;
+    for (std::size_t i = 0; i < lit.frame.semantic.size(); ++i) {
+      const std::size_t row = i / kWidth, column = i % kWidth;
+      if (row < kHeight / 2 || column < kWidth / 3 || column > 2 * kWidth / 3) continue;
+      if (lit.frame.semantic[i] != static_cast<uint8_t>(SemanticClass::kRoad)) continue;
+      lit_road += lit.frame.rgb[3 * i + 1];
+      dark_road += dark.frame.rgb[3 * i + 1];
+    }
+    return lit_road / std::max(dark_road, 1.0);
+  };
+  EXPECT_GT(lit_against_dark(conditions::Of(Preset::NIGHT)), 1.3) << "the road ahead is lit";
+  EXPECT_EQ(lit_against_dark(conditions::Of(Preset::CLEAR_NOON)), 1.0) << "off by day";
+}
+
 TEST_F(LookRenderTest, NightIsDarkerThanDuskAndDuskThanNoonAndRainDarkensTheRoad) {
   const std::size_t chase = 2;  // car_chase: road, sidewalks, houses and sky
   ASSERT_EQ(scene_->cameras[chase].name, "car_chase");

@@ -117,6 +117,7 @@ TEST(MeshBuilder, EveryCarStyleFillsExactlyTheSameBounds) {
   };
   EXPECT_GT(cabin_length(CarStyle::kVan), cabin_length(CarStyle::kSedan) + 1.0f);
   EXPECT_LT(cabin_length(CarStyle::kPickup), cabin_length(CarStyle::kSedan));
+  EXPECT_GT(cabin_length(CarStyle::kTruck), cabin_length(CarStyle::kVan)) << "cab and cargo box: roof end to end";
 }
 
 TEST(MeshBuilder, UavIsCentredAndWithinItsSpan) {
