@@ -242,7 +242,8 @@ vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic_and_flags, fl
     float d2 = dot(to_car, to_car);
     vec3 l = to_car * inversesqrt(d2);
     float axis = -dot(l, u_headlight_directions[i]);
-    float beam = smoothstep(0.9, 0.995, axis) * (0.15 + 0.85 * smoothstep(0.97, 0.9995, axis));
+    float beam = clamp((axis - 0.9) * 10.0, 0.0, 1.0);
+    beam *= beam * beam;  // a hot centre, a dim edge
     float window = max(1.0 - d2 / 2500.0, 0.0);
     light += vec3(1.0, 0.96, 0.88) * (40.0 * u_weather.z * max(dot(n, l), 0.0) * beam * window * window / (1.0 + 0.02 * d2));
   }
