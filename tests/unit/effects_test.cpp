@@ -28,7 +28,7 @@
 #include "server/sim/world.h"
 #include "tests/support/no_warnings.h"
 #include "tests/support/rendered_frame.h"
-#include "tests/unit/traffic_test_support.h"
+#include "tests/unit/urban_render_support.h"
 
 namespace sim4cv::render {
 namespace {
@@ -190,52 +190,25 @@ TEST(EffectsTableTest, ProjectedBoxesFollowOpenCvsDistortion) {
   }
 }
 
-// The densest urban map with traffic, as in look_test.
-class EffectsRenderTest : public ::testing::Test {
+// Every camera of the urban map (urban_render_support.h), with effects,
+// and a second renderer for the finer pinhole renders a lens is checked on.
+class EffectsRenderTest : public testing::UrbanRenderTest {
  protected:
-  static constexpr uint32_t kWidth = 240, kHeight = 135;
-
   static void SetUpTestSuite() {
-    scene_ = std::make_unique<sim::Scene>(sim::SceneFromMap(
-        (traffic::testing::SourceDir() / "scenes/driving/train/01_urban.map").string(), "", 8.0f, kWidth, kHeight));
-    sim::AddTraffic(*scene_, traffic::testing::Config(10, 12, 12));
-    world_ = std::make_unique<sim::World>(*scene_);
-    state_ = std::make_unique<sim::State>(world_->InitialState());
-    for (int i = 0; i < 480; ++i) world_->Step(*state_, 1.0 / 240.0);
-    context_ = CreateOsMesaContext();
-    graphics_ = std::make_unique<SceneGraphics>(*scene_);
-    graphics_->Update(*state_);
-    renderer_ = std::make_unique<Renderer>(graphics_->meshes(), kWidth, kHeight);
+    UrbanRenderTest::SetUpTestSuite();
     fine_renderer_ = std::make_unique<Renderer>(graphics_->meshes(), 4 * kWidth, 4 * kHeight);
   }
   static void TearDownTestSuite() {
     fine_renderer_.reset();
-    renderer_.reset();
-    graphics_.reset();
-    context_.reset();
-    state_.reset();
-    world_.reset();
-    scene_.reset();
+    UrbanRenderTest::TearDownTestSuite();
   }
 
-  struct Shot {
-    testing::RenderedFrame frame{kWidth, kHeight};
-    std::vector<uint32_t> unoccluded;
-  };
-
   static CameraView View(std::size_t index, const effects::CameraEffects& effects) {
-    CameraView view = graphics_->CameraAt(scene_->cameras[index], *state_);
-    view.previous_world_from_camera = view.world_from_camera;
-    view.previous_world_from_camera(0, 3) -= 0.4f;  // a moving camera: flow is not zero
+    CameraView view = UrbanRenderTest::View(index);
     view.effects = effects;
     return view;
   }
-  static Shot Render(const CameraView& view) {
-    Shot shot;
-    shot.unoccluded.assign(graphics_->instance_id_bound(), 0);
-    renderer_->Render(view, graphics_->draw_items(), shot.frame.Buffers(channels::kAllPixels), shot.unoccluded);
-    return shot;
-  }
+  using UrbanRenderTest::Render;
   static Shot Render(std::size_t index, const effects::CameraEffects& effects) { return Render(View(index, effects)); }
 
   // What a lens looks into: the pinhole view widened by the lens map, at
@@ -248,33 +221,16 @@ class EffectsRenderTest : public ::testing::Test {
     pinhole.height *= scale;
     return pinhole;
   }
-  static testing::RenderedFrame RenderFine(const CameraView& pinhole) {
-    testing::RenderedFrame frame(pinhole.width, pinhole.height);
+  static sim4cv::testing::RenderedFrame RenderFine(const CameraView& pinhole) {
+    sim4cv::testing::RenderedFrame frame(pinhole.width, pinhole.height);
     fine_renderer_->Render(pinhole, graphics_->draw_items(), frame.Buffers(channels::kAllPixels), {});
     return frame;
   }
 
-  static std::unique_ptr<sim::Scene> scene_;
-  static std::unique_ptr<sim::World> world_;
-  static std::unique_ptr<sim::State> state_;
-  static std::unique_ptr<GlContext> context_;
-  static std::unique_ptr<SceneGraphics> graphics_;
-  static std::unique_ptr<Renderer> renderer_;
-  static std::unique_ptr<Renderer> fine_renderer_;
+  inline static std::unique_ptr<Renderer> fine_renderer_;
 };
 
-std::unique_ptr<sim::Scene> EffectsRenderTest::scene_;
-std::unique_ptr<sim::World> EffectsRenderTest::world_;
-std::unique_ptr<sim::State> EffectsRenderTest::state_;
-std::unique_ptr<GlContext> EffectsRenderTest::context_;
-std::unique_ptr<SceneGraphics> EffectsRenderTest::graphics_;
-std::unique_ptr<Renderer> EffectsRenderTest::renderer_;
-std::unique_ptr<Renderer> EffectsRenderTest::fine_renderer_;
-
-template <typename T>
-bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
+using testing::SameBytes;
 
 double Psnr(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   double sum = 0;
@@ -383,7 +339,7 @@ TEST_F(EffectsRenderTest, ALensDistortsEveryChannelAlikeByTheModel) {
     const Shot distorted = Render(lensed);
     // The widened pinhole view the lens map points into.
     const LensMap map = MakeLensMap(lensed);
-    const testing::RenderedFrame fine = RenderFine(Pinhole(lensed, map, 2));
+    const sim4cv::testing::RenderedFrame fine = RenderFine(Pinhole(lensed, map, 2));
     std::size_t agree = 0;
     const std::size_t pixels = std::size_t{kWidth} * kHeight;
     for (std::size_t p = 0; p < pixels; ++p) {
@@ -433,7 +389,7 @@ TEST_F(EffectsRenderTest, DistortedBoxesMatchOpenCvsModelWithinHalfAPixel) {
       const Shot distorted = Render(lensed);
       const LensMap map = MakeLensMap(lensed);
       const CameraView pinhole = Pinhole(lensed, map, scale);
-      const testing::RenderedFrame fine = RenderFine(pinhole);
+      const sim4cv::testing::RenderedFrame fine = RenderFine(pinhole);
       const CameraIntrinsics k = IntrinsicsOf(lensed), kf = IntrinsicsOf(pinhole);
       const cv::Mat camera = (cv::Mat_<double>(3, 3) << k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
       const cv::Mat coefficients = (cv::Mat_<double>(1, 5) << k.lens.k1, k.lens.k2, k.lens.p1, k.lens.p2, k.lens.k3);
@@ -510,7 +466,7 @@ TEST_F(EffectsRenderTest, FlowThroughALensIsInDistortedPixels) {
   // A pixel's flow points back to where its surface point was a frame ago:
   // the previous frame's render through the same lens shows that point there.
   // Checked on the model: previous = Distort(source - undistorted flow).
-  const testing::RenderedFrame fine = RenderFine(Pinhole(lensed, map, 2));
+  const sim4cv::testing::RenderedFrame fine = RenderFine(Pinhole(lensed, map, 2));
   int checked = 0;
   for (uint32_t row = 5; row < kHeight; row += 11) {
     for (uint32_t column = 5; column < kWidth; column += 13) {

@@ -21,7 +21,7 @@
 #include "server/sim/world.h"
 #include "tests/support/no_warnings.h"
 #include "tests/support/rendered_frame.h"
-#include "tests/unit/traffic_test_support.h"
+#include "tests/unit/urban_render_support.h"
 
 namespace sim4cv::render {
 namespace {
@@ -63,7 +63,8 @@ TEST(ConditionsTest, RandomisationIsReproducibleFromItsSeedAndCoversThePresets) 
     seen.insert(a.preset);
   }
   EXPECT_EQ(seen.size(), conditions::kPresets.size()) << "60 draws reach every preset";
-  EXPECT_NE(conditions::Randomized(42, 0, conditions::Conditions{}).variation, conditions::Randomized(43, 0, conditions::Conditions{}).variation);
+  EXPECT_NE(conditions::Randomized(42, 0, conditions::Conditions{}).variation,
+            conditions::Randomized(43, 0, conditions::Conditions{}).variation);
   EXPECT_EQ(conditions::Randomized(42, 0, conditions::Of(Preset::FOG, Quality::kFast)).quality, Quality::kFast);
 }
 
@@ -102,38 +103,14 @@ TEST(LookTest, EachPresetLooksAsItsNameSays) {
   EXPECT_FALSE(fast.shadows);
 }
 
-// The densest urban map with traffic, stepped a few seconds, seen by each of
-// its cameras with every channel.
-class LookRenderTest : public ::testing::Test {
+// Every camera of the urban map with every channel (urban_render_support.h),
+// the street lanterns known to the renderer.
+class LookRenderTest : public testing::UrbanRenderTest {
  protected:
-  static constexpr uint32_t kWidth = 240, kHeight = 135;
-
   static void SetUpTestSuite() {
-    scene_ = std::make_unique<sim::Scene>(sim::SceneFromMap(
-        (traffic::testing::SourceDir() / "scenes/driving/train/01_urban.map").string(), "", 8.0f, kWidth, kHeight));
-    sim::AddTraffic(*scene_, traffic::testing::Config(10, 12, 12));
-    world_ = std::make_unique<sim::World>(*scene_);
-    state_ = std::make_unique<sim::State>(world_->InitialState());
-    for (int i = 0; i < 480; ++i) world_->Step(*state_, 1.0 / 240.0);
-    context_ = CreateOsMesaContext();
-    graphics_ = std::make_unique<SceneGraphics>(*scene_);
-    graphics_->Update(*state_);
-    renderer_ = std::make_unique<Renderer>(graphics_->meshes(), kWidth, kHeight);
+    UrbanRenderTest::SetUpTestSuite();
     renderer_->SetLamps(graphics_->lamps());
   }
-  static void TearDownTestSuite() {
-    renderer_.reset();
-    graphics_.reset();
-    context_.reset();
-    state_.reset();
-    world_.reset();
-    scene_.reset();
-  }
-
-  struct Shot {
-    testing::RenderedFrame frame{kWidth, kHeight};
-    std::vector<uint32_t> unoccluded;
-  };
 
   // Every channel of camera `index` in `conditions`.
   static Shot Render(std::size_t index, const conditions::Conditions& conditions) {
@@ -141,34 +118,11 @@ class LookRenderTest : public ::testing::Test {
   }
   static Shot Render(std::size_t index, const Look& look) {
     renderer_->SetLook(look);
-    CameraView view = graphics_->CameraAt(scene_->cameras[index], *state_);
-    view.previous_world_from_camera = view.world_from_camera;
-    view.previous_world_from_camera(0, 3) -= 0.3f;  // a moving camera: flow is not zero
-    Shot shot;
-    shot.unoccluded.assign(graphics_->instance_id_bound(), 0);
-    renderer_->Render(view, graphics_->draw_items(), shot.frame.Buffers(channels::kAllPixels), shot.unoccluded);
-    return shot;
+    return UrbanRenderTest::Render(View(index));
   }
-
-  static std::unique_ptr<sim::Scene> scene_;
-  static std::unique_ptr<sim::World> world_;
-  static std::unique_ptr<sim::State> state_;
-  static std::unique_ptr<GlContext> context_;
-  static std::unique_ptr<SceneGraphics> graphics_;
-  static std::unique_ptr<Renderer> renderer_;
 };
 
-std::unique_ptr<sim::Scene> LookRenderTest::scene_;
-std::unique_ptr<sim::World> LookRenderTest::world_;
-std::unique_ptr<sim::State> LookRenderTest::state_;
-std::unique_ptr<GlContext> LookRenderTest::context_;
-std::unique_ptr<SceneGraphics> LookRenderTest::graphics_;
-std::unique_ptr<Renderer> LookRenderTest::renderer_;
-
-template <typename T>
-bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
+using testing::SameBytes;
 
 double MeanLuma(const testing::RenderedFrame& frame) {
   double sum = 0;
@@ -266,12 +220,7 @@ TEST_F(LookRenderTest, CachedShadowsOfFixedCastersAgreeWithAFreshRenderer) {
   const Shot warm = Render(0, morning);
   Renderer fresh(graphics_->meshes(), kWidth, kHeight);
   fresh.SetLook(LookOf(morning));
-  CameraView view = graphics_->CameraAt(scene_->cameras[0], later);
-  view.previous_world_from_camera = view.world_from_camera;
-  view.previous_world_from_camera(0, 3) -= 0.3f;
-  Shot cold;
-  cold.unoccluded.assign(graphics_->instance_id_bound(), 0);
-  fresh.Render(view, graphics_->draw_items(), cold.frame.Buffers(channels::kAllPixels), cold.unoccluded);
+  const Shot cold = UrbanRenderTest::Render(View(0), fresh);  // the UAV did not move
   graphics_->Update(*state_);
   EXPECT_TRUE(SameBytes(warm.frame.rgb, cold.frame.rgb));
 }
@@ -282,11 +231,7 @@ TEST_F(LookRenderTest, StreetLanternsLightTheRoadAtNightOnly) {
     const Shot lit = Render(1, conditions);  // car_front, with the lanterns
     Renderer unlit(graphics_->meshes(), kWidth, kHeight);
     unlit.SetLook(LookOf(conditions));
-    CameraView view = graphics_->CameraAt(scene_->cameras[1], *state_);
-    view.previous_world_from_camera = view.world_from_camera;
-    view.previous_world_from_camera(0, 3) -= 0.3f;
-    Shot dark;
-    unlit.Render(view, graphics_->draw_items(), dark.frame.Buffers(channels::kAllPixels), {});
+    const Shot dark = UrbanRenderTest::Render(View(1), unlit);
     EXPECT_TRUE(SameBytes(lit.frame.depth, dark.frame.depth));
     return MeanLuma(lit.frame) - MeanLuma(dark.frame);
   };
