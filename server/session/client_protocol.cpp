@@ -66,6 +66,8 @@ Outcome ClientProtocol::Handle(const proto::Envelope& request, proto::Envelope& 
       return HandleSubscribe(request.subscribe(), reply);
     case Kind::kStep:
       return HandleStep(reply);
+    case Kind::kNextFrame:
+      return HandleNextFrame(reply);
     case Kind::kControls:
       return HandleControls(request.controls(), reply);
     case Kind::kTrackerOutput:
@@ -160,11 +162,12 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
     seen |= channels::Bit(channel);
   }
   const proto::Delivery delivery = subscribe.delivery();
-  if (delivery != proto::DELIVERY_LOCKSTEP && delivery != proto::DELIVERY_NEWEST) {
-    return Refuse(
-        proto::ERROR_CODE_INVALID_ARGUMENT,
-        "Subscribe.delivery is " + std::to_string(delivery) + "; use DELIVERY_LOCKSTEP (1) or DELIVERY_NEWEST (2)",
-        false, reply);
+  if (delivery != proto::DELIVERY_LOCKSTEP && delivery != proto::DELIVERY_NEWEST &&
+      delivery != proto::DELIVERY_ON_REQUEST) {
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                  "Subscribe.delivery is " + std::to_string(delivery) +
+                      "; use DELIVERY_LOCKSTEP (1), DELIVERY_NEWEST (2) or DELIVERY_ON_REQUEST (3)",
+                  false, reply);
   }
   if (delivery == proto::DELIVERY_LOCKSTEP && context_.mode != proto::SIM_MODE_LOCKSTEP) {
     return Refuse(proto::ERROR_CODE_INVALID_STATE,
@@ -176,6 +179,7 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
   with_state_ = subscribe.with_state();
   camera_index_ = static_cast<uint32_t>(camera);
   outstanding_steps_ = 0;
+  frame_requested_ = false;
   subscription_.set_camera(subscribe.camera());
   *subscription_.mutable_channels() = subscribe.channels();
   subscription_.set_delivery(delivery);
@@ -188,6 +192,18 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
       {client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, seen, link_.lock(), std::move(gate)}});
   *reply.mutable_subscribed() = subscription_;
   return Outcome::kReply;
+}
+
+// Nothing to answer: the frame is the answer, sent by the transport when
+// one is waiting (ClientSession::NextFrame).
+Outcome ClientProtocol::HandleNextFrame(proto::Envelope& reply) {
+  if (!on_request()) {
+    return Refuse(proto::ERROR_CODE_INVALID_STATE,
+                  "NextFrame needs an on-request subscription; send Subscribe with DELIVERY_ON_REQUEST first", false,
+                  reply);
+  }
+  frame_requested_ = true;
+  return Outcome::kNoReply;
 }
 
 Outcome ClientProtocol::HandleStep(proto::Envelope& reply) {

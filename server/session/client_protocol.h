@@ -50,6 +50,13 @@ class ClientProtocol {
   // `count` frames reached the client at once (the shm ring counts them).
   void OnFramesSent(uint64_t count);
 
+  // On-request delivery (DELIVERY_ON_REQUEST): whether the client asked for
+  // a frame it has not been sent yet; the transport's session marks it
+  // answered when it takes a frame to send.
+  bool frame_requested() const { return frame_requested_; }
+  bool on_request() const { return subscribed_ && subscription_.delivery() == proto::DELIVERY_ON_REQUEST; }
+  void OnRequestAnswered() { frame_requested_ = false; }
+
   // The connection is gone: tell the sim thread (once).
   void Disconnect();
 
@@ -65,6 +72,7 @@ class ClientProtocol {
   Outcome HandleHello(const proto::Hello& hello, proto::Envelope& reply);
   Outcome HandleSubscribe(const proto::Subscribe& subscribe, proto::Envelope& reply);
   Outcome HandleStep(proto::Envelope& reply);
+  Outcome HandleNextFrame(proto::Envelope& reply);
   Outcome HandleControls(const proto::Controls& controls, proto::Envelope& reply);
   Outcome HandleTrackerOutput(const proto::TrackerOutput& output, proto::Envelope& reply);
   // The command queue is full (CommandQueue::TryPost): `what` was dropped.
@@ -87,6 +95,7 @@ class ClientProtocol {
   bool disconnected_ = false;
   proto::Subscribed subscription_;
   uint64_t outstanding_steps_ = 0;
+  bool frame_requested_ = false;
   // Configures posted and not yet answered: counted up here, down by each
   // request's ConfigureReplyLink when the sim thread answers (its thread).
   std::shared_ptr<std::atomic<uint32_t>> outstanding_configures_ = std::make_shared<std::atomic<uint32_t>>(0);

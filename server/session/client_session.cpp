@@ -10,6 +10,8 @@ std::shared_ptr<ClientSession> ClientSession::Create(ClientId client, const Serv
 }
 
 FrameRef ClientSession::NextFrame() {
+  // On request, a frame waits in the mailbox (replaced by newer ones) until asked for.
+  if (protocol_->on_request() && !protocol_->frame_requested()) return {};
   for (;;) {
     if (!next_) next_ = mailbox_.Take();
     if (!next_) return {};
@@ -18,7 +20,10 @@ FrameRef ClientSession::NextFrame() {
     if (offered_.pending()) return {};
     FrameRef frame = std::move(next_);
     // A frame of the camera this client subscribed to before a re-subscribe is stale.
-    if (protocol_->subscribed() && frame->camera_index == protocol_->camera_index()) return frame;
+    if (protocol_->subscribed() && frame->camera_index == protocol_->camera_index()) {
+      protocol_->OnRequestAnswered();
+      return frame;
+    }
   }
 }
 

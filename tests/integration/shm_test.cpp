@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <iostream>
+#include <thread>
 #include <vector>
 
 #include "protocol/shm_sync.h"
@@ -246,6 +248,36 @@ TEST_F(ShmDaemonTest, ReplyRoundTripIsFast) {
               micros[micros.size() * 9 / 10], micros.back());
   // The target is < 100 us on an idle host; the bound leaves room for a loaded CI machine.
   EXPECT_LT(median, 5000.0);
+}
+
+}  // namespace
+}  // namespace sim4cv::testing
+
+namespace sim4cv::testing {
+namespace {
+
+// Over shared memory the newest slot is always the newest frame: a 10 Hz
+// reader of a 30 Hz stream copies frames at most a frame period (plus the
+// copy) old (docs/protocol.md 7.3).
+TEST_F(ShmDaemonTest, TheNewestSlotIsAtMostAFramePeriodOld) {
+  StartShmDaemon({"--mode", "realtime", "--frame-hz", "30"});
+  auto shm = OpenShm();
+  ASSERT_TRUE(shm->WaitForFrame(0, std::chrono::milliseconds(10000)));
+  std::vector<double> ages;
+  OwnedFrame frame;
+  for (int i = 0; i < 20; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    ASSERT_TRUE(shm->ReadNewest(frame));
+    const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                            std::chrono::steady_clock::now().time_since_epoch())
+                            .count();
+    ages.push_back(static_cast<double>(now - frame.render_end_mono_ns) / 1e6);
+  }
+  std::sort(ages.begin(), ages.end());
+  std::cout << "[ numbers  ] shm frame age at 10 Hz of 30 Hz: median " << ages[ages.size() / 2] << " ms, 90% "
+            << ages[ages.size() * 9 / 10] << " ms, worst " << ages.back() << " ms\n";
+  EXPECT_LT(ages[ages.size() / 2], 33.0 + 20.0);
+  EXPECT_LT(ages[ages.size() * 9 / 10], 33.0 + 60.0);
 }
 
 }  // namespace

@@ -453,3 +453,24 @@ def test_newest_delivery_counts_drops(daemon, connect):
         if frame.frame_id == last:
             break
     assert frame.dropped_frames > 0, "a viewer that read nothing for 40 frames dropped none"
+
+
+def test_on_request_delivery_sends_the_newest_frame_when_asked(daemon, connect):
+    driver = connect("driver")
+    tracker = connect("tracker")
+    driver.subscribe("uav", ["boxes"], "lockstep")
+    tracker.subscribe("uav", ["rgb", "mask"], "on_request")
+    for _ in range(5):
+        last = driver.step_and_receive(FRAME_TIMEOUT_S).frame_id
+    frame = tracker.request_frame(FRAME_TIMEOUT_S)
+    assert frame.frame_id == last, "the newest frame, not the first one rendered"
+    assert sim4cv.image_array(frame, pb.CHANNEL_RGB).shape == (180, 320, 3)
+    with pytest.raises(TimeoutError):
+        tracker.receive_frame(0.3)  # nothing arrives unasked
+    following = driver.step_and_receive(FRAME_TIMEOUT_S).frame_id
+    assert tracker.request_frame(FRAME_TIMEOUT_S).frame_id == following
+    newest = connect("newest")
+    newest.subscribe("uav", ["rgb"], "newest")
+    with pytest.raises(sim4cv.ServerError) as refused:
+        newest.request_frame(FRAME_TIMEOUT_S)
+    assert "NextFrame needs an on-request subscription" in str(refused.value)

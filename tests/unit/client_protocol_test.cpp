@@ -264,7 +264,7 @@ TEST_F(ClientProtocolTest, UnspecifiedOrUnknownDeliveryIsRefused) {
   Handshake();
   ExpectError(Send(Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_UNSPECIFIED)),
               proto::ERROR_CODE_INVALID_ARGUMENT, false,
-              {"Subscribe.delivery is 0", "DELIVERY_LOCKSTEP (1) or DELIVERY_NEWEST (2)"});
+              {"Subscribe.delivery is 0", "DELIVERY_LOCKSTEP (1), DELIVERY_NEWEST (2) or DELIVERY_ON_REQUEST (3)"});
   ExpectError(Send(Subscribe("uav", {proto::CHANNEL_RGB}, static_cast<proto::Delivery>(7))),
               proto::ERROR_CODE_INVALID_ARGUMENT, false, {"Subscribe.delivery is 7"});
 }
@@ -347,6 +347,23 @@ TEST_F(ClientProtocolTest, StepWithoutLockstepSubscriptionIsRefused) {
   ASSERT_EQ(Send(Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_NEWEST)), Outcome::kReply);
   Drain();
   ExpectError(Send(Step()), proto::ERROR_CODE_INVALID_STATE, false, {"DELIVERY_LOCKSTEP"});
+}
+
+TEST_F(ClientProtocolTest, NextFrameWithoutAnOnRequestSubscriptionIsRefused) {
+  Handshake();
+  proto::Envelope next;
+  next.mutable_next_frame();
+  ExpectError(Send(next), proto::ERROR_CODE_INVALID_STATE, false,
+              {"NextFrame needs an on-request subscription; send Subscribe with DELIVERY_ON_REQUEST first"});
+  ASSERT_EQ(Send(Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_NEWEST)), Outcome::kReply);
+  Drain();
+  ExpectError(Send(next), proto::ERROR_CODE_INVALID_STATE, false, {"DELIVERY_ON_REQUEST"});
+  ASSERT_EQ(Send(Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_ON_REQUEST)), Outcome::kReply);
+  Drain();
+  EXPECT_EQ(Send(next), Outcome::kNoReply) << "the frame is the answer";
+  EXPECT_TRUE(protocol_.frame_requested());
+  ASSERT_EQ(Send(Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_ON_REQUEST)), Outcome::kReply);
+  EXPECT_FALSE(protocol_.frame_requested()) << "a new subscription starts with no request";
 }
 
 TEST_F(ClientProtocolTest, StepPostsAStepCommand) {

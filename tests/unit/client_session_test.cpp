@@ -38,7 +38,7 @@ class ClientSessionTest : public ::testing::Test {
   }
 
   void Send(const proto::Envelope& request) { ASSERT_EQ(session_->Handle(request, reply_), Outcome::kReply); }
-  void HandshakeAndSubscribe(const std::string& camera) {
+  void HandshakeAndSubscribe(const std::string& camera, proto::Delivery delivery = proto::DELIVERY_LOCKSTEP) {
     proto::Envelope hello;
     hello.mutable_hello()->set_protocol_version(wire::kProtocolVersion);
     hello.mutable_hello()->set_client_name("unit");
@@ -46,7 +46,7 @@ class ClientSessionTest : public ::testing::Test {
     proto::Envelope subscribe;
     subscribe.mutable_subscribe()->set_camera(camera);
     subscribe.mutable_subscribe()->add_channels(proto::CHANNEL_RGB);
-    subscribe.mutable_subscribe()->set_delivery(proto::DELIVERY_LOCKSTEP);
+    subscribe.mutable_subscribe()->set_delivery(delivery);
     Send(subscribe);
     ASSERT_TRUE(reply_.has_subscribed()) << reply_.ShortDebugString();
   }
@@ -97,6 +97,36 @@ TEST_F(ClientSessionTest, AReplyOfferedBeforeAFrameGoesFirst) {
   ASSERT_TRUE(frame);
   EXPECT_EQ(frame->frame_id, 1u);
   EXPECT_FALSE(session_->NextFrame());
+}
+
+// On request, frames wait (the newest replacing the rest) until a NextFrame
+// asks; one request takes one frame, and one asked for before any is
+// rendered takes the next one.
+TEST_F(ClientSessionTest, OnRequestDeliverySendsOneFrameForEachRequest) {
+  HandshakeAndSubscribe("uav", proto::DELIVERY_ON_REQUEST);
+  proto::Envelope next;
+  next.mutable_next_frame();
+  session_->OfferFrame(MakeFrame(1));
+  session_->OfferFrame(MakeFrame(2));
+  EXPECT_FALSE(session_->NextFrame()) << "nobody asked";
+  ASSERT_EQ(session_->Handle(next, reply_), Outcome::kNoReply);
+  ASSERT_EQ(session_->Handle(next, reply_), Outcome::kNoReply);  // a repeated request asks for nothing more
+  FrameRef frame = session_->NextFrame();
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(frame->frame_id, 2u) << "the newest";
+  EXPECT_EQ(session_->dropped(), 1u) << "frame 1, which nobody asked for";
+  session_->OfferFrame(MakeFrame(3));
+  EXPECT_FALSE(session_->NextFrame()) << "one request, one frame";
+  ASSERT_EQ(session_->Handle(next, reply_), Outcome::kNoReply);
+  frame = session_->NextFrame();
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(frame->frame_id, 3u);
+  ASSERT_EQ(session_->Handle(next, reply_), Outcome::kNoReply);
+  EXPECT_FALSE(session_->NextFrame()) << "already sent the newest: the request waits for the next";
+  session_->OfferFrame(MakeFrame(4));
+  frame = session_->NextFrame();
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(frame->frame_id, 4u);
 }
 
 TEST_F(ClientSessionTest, FramesOfAReplacedSubscriptionAreSkipped) {

@@ -113,6 +113,14 @@ const proto::Frame& Client::StepAndReceive(Duration timeout) {
   return frame_;
 }
 
+const proto::Frame& Client::RequestFrame(Duration timeout) {
+  proto::Envelope request;
+  request.mutable_next_frame();
+  SendEnvelope(request);
+  if (!ReceiveFrame(frame_, timeout)) throw ConnectionError(TimeoutMessage("a requested Frame", timeout, peer_));
+  return frame_;
+}
+
 void Client::SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence) {
   SendEnvelope(detail::TrackerOutputRequest(frame_id, x, y, width, height, confidence));
 }

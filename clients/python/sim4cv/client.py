@@ -212,7 +212,7 @@ def channel_value(channel):
 
 
 def delivery_value(delivery):
-    """DELIVERY_* value for an int or a name such as "lockstep" or "newest"."""
+    """DELIVERY_* value for an int or a name such as "lockstep", "newest" or "on_request"."""
     return _enum_value(pb.Delivery, "DELIVERY_", delivery)
 
 
@@ -443,6 +443,17 @@ class Client(WorldRequests):
     def step_and_receive(self, timeout=10.0):
         """step() then receive_frame()."""
         self.step()
+        return self.receive_frame(timeout)
+
+    def request_frame(self, timeout=10.0):
+        """On-request delivery ("on_request"): asks for a frame (NextFrame)
+        and returns it: the newest this client was not sent yet, else the
+        next one rendered, so at most one frame period plus its transfer
+        old. Raises TimeoutError, or ServerError if the subscription is not
+        on request."""
+        envelope = pb.Envelope()
+        envelope.next_frame.SetInParent()
+        self.send_envelope(envelope)
         return self.receive_frame(timeout)
 
     def send_tracker_output(self, frame_id, x, y, w, h, confidence):

@@ -112,6 +112,11 @@ class Client {
   bool ReceiveFrame(proto::Frame& frame, Duration timeout = Duration(10000));
   // Step() then ReceiveFrame(); throws ConnectionError on timeout.
   const proto::Frame& StepAndReceive(Duration timeout = Duration(10000));
+  // On-request delivery (DELIVERY_ON_REQUEST): asks for a frame (NextFrame)
+  // and waits for it: the newest this client was not sent yet, else the next
+  // one rendered; at most one frame period plus its transfer old. Throws
+  // ConnectionError on timeout.
+  const proto::Frame& RequestFrame(Duration timeout = Duration(10000));
 
   void SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence);
   void SendControls(uint32_t entity_id, float steering, float throttle, float brake);

@@ -59,6 +59,12 @@ class UdpClient {
   // ServerError if an Error arrives first. While waiting it sends a
   // keep-alive whenever nothing was sent for `keepalive_interval()`.
   bool ReceiveFrame(proto::Frame& frame, Duration timeout = Duration(10000));
+  // On-request delivery (DELIVERY_ON_REQUEST): asks for a frame (NextFrame,
+  // repeated every retry interval: a lost request or chunk costs one
+  // interval) and waits for it: the newest this client was not sent yet,
+  // else the next one rendered. Frames queued before are dropped as stale.
+  // Returns false on timeout; throws ServerError if the daemon refuses.
+  bool RequestFrame(proto::Frame& frame, Duration timeout = Duration(10000));
 
   void SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence);
   void SendControls(uint32_t entity_id, float steering, float throttle, float brake);

@@ -93,6 +93,15 @@ bool UdpClient::ReceiveFrame(proto::Frame& frame, Duration timeout) {
   return true;
 }
 
+bool UdpClient::RequestFrame(proto::Frame& frame, Duration timeout) {
+  std::erase_if(pending_, [](const Envelope& queued) { return queued.has_frame(); });  // older than asked for
+  Envelope request;
+  request.mutable_next_frame();
+  if (!Request(request, Envelope::kFrame, scratch_, Clock::now() + timeout)) return false;
+  frame.Swap(scratch_.mutable_frame());
+  return true;
+}
+
 void UdpClient::SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence) {
   SendEnvelope(detail::TrackerOutputRequest(frame_id, x, y, width, height, confidence));
 }
