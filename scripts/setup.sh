@@ -9,7 +9,7 @@ PACKAGES=(
   protobuf-compiler libprotobuf-dev
   libopencv-dev libopencv-contrib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-protobuf python3-numpy python3-pytest
+  python3 python3-protobuf python3-numpy python3-pytest python3-pip python3-setuptools python3-wheel  # wheel: pip install of clients/python
   clang libclang-rt-14-dev  # the fuzz build (scripts/fuzz.sh): clang and its libFuzzer/sanitizer runtimes
 )
 
