@@ -108,14 +108,14 @@ struct Renderer::Impl {
 
   Look look = LookOf(conditions::Conditions{});
   std::vector<Eigen::Vector3f> lamps;
-  std::vector<std::pair<float, uint32_t>> lamp_order;  // scratch: distance², index
+  std::vector<Headlight> headlights;                    // this frame's cars
+  std::vector<std::pair<float, uint32_t>> light_order;  // scratch: distance², index
   std::array<Eigen::Vector3f, kMaxLamps> nearest_lamps;
-  // Fills nearest_lamps with the lamps nearest `point`; how many.
-  int NearestLamps(const Eigen::Vector3f& point);
-  std::vector<Headlight> headlights;  // this frame's cars
   std::array<Eigen::Vector3f, kMaxHeadlights> nearest_headlights, nearest_directions;
-  // Fills nearest_headlights/_directions with the cars' nearest `point`; how many.
-  int NearestHeadlights(const Eigen::Vector3f& point);
+  // Orders light_order so that its first entries index the (at most `most`)
+  // of `count` lights nearest `point`, `position(i)` being light i's; how many.
+  template <typename Position>
+  int Nearest(std::size_t count, Position position, const Eigen::Vector3f& point, int most);
   // Made the first time the full look draws RGB (with shadows, for the map).
   std::unique_ptr<ShadowMap> shadow_map;
   std::unique_ptr<SkyPass> sky;
@@ -153,8 +153,8 @@ struct Renderer::Impl {
     Eigen::Matrix4f view, projection;  // projection: before the top-row-first mirror
     ShadowSampling shadow;
   };
-  void DrawPass(const Pass& pass, std::span<const DrawItem> items, RenderTargets& into, uint32_t scale,
-                PlaneSet planes, uint32_t look, std::span<uint32_t> unoccluded_pixels);
+  void DrawPass(const Pass& pass, std::span<const DrawItem> items, RenderTargets& into, uint32_t scale, PlaneSet planes,
+                uint32_t look, std::span<uint32_t> unoccluded_pixels);
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
   void Draw(const DrawItem& item) const;
   // The draw call of one mesh, with whatever program and uniforms are set.
@@ -184,7 +184,7 @@ void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
     const auto base_vertex = static_cast<uint32_t>(vertices.size());
     for (uint32_t index : mesh.indices) {
       SIM4CV_THROW_UNLESS(index < mesh.vertices.size(), "mesh " << meshes.size() << " has index " << index
-                                                                 << " past its " << mesh.vertices.size() << " vertices");
+                                                                << " past its " << mesh.vertices.size() << " vertices");
       indices.push_back(base_vertex + index);  // one shared buffer, so indices are rebased
     }
     vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
@@ -208,7 +208,8 @@ void Renderer::Impl::UploadMeshes(const std::vector<Mesh>& all_meshes) {
   attribute(1, offsetof(Vertex, normal));
   attribute(2, offsetof(Vertex, color));
   glEnableVertexAttribArray(3);
-  glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, sizeof(Vertex), reinterpret_cast<const void*>(offsetof(Vertex, semantic)));
+  glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, sizeof(Vertex),
+                         reinterpret_cast<const void*>(offsetof(Vertex, semantic)));
 }
 
 void Renderer::Impl::UsePlanes(RenderTargets& into, PlaneSet planes, uint32_t look) {
@@ -221,13 +222,12 @@ void Renderer::Impl::UsePlanes(RenderTargets& into, PlaneSet planes, uint32_t lo
 
 bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const {
   const MeshRange& mesh = meshes[item.mesh];
-  const Eigen::Vector3f center = item.world_from_model.topLeftCorner<3, 3>() * mesh.sphere_center +
-                                 item.world_from_model.block<3, 1>(0, 3);
+  const Eigen::Vector3f center =
+      item.world_from_model.topLeftCorner<3, 3>() * mesh.sphere_center + item.world_from_model.block<3, 1>(0, 3);
   const float largest_scale = item.world_from_model.topLeftCorner<3, 3>().colwise().norm().maxCoeff();
   const float radius = mesh.sphere_radius * largest_scale;
-  return std::all_of(planes.begin(), planes.end(), [&](const Eigen::Vector4f& plane) {
-    return plane.head<3>().dot(center) + plane.w() >= -radius;
-  });
+  return std::all_of(planes.begin(), planes.end(),
+                     [&](const Eigen::Vector4f& plane) { return plane.head<3>().dot(center) + plane.w() >= -radius; });
 }
 
 void Renderer::Impl::Draw(const DrawItem& item) const {
@@ -268,11 +268,11 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
   labelled_drawn.clear();
   for (uint32_t i = 0; i < items.size(); ++i) {
     const DrawItem& item = items[i];
-    SIM4CV_THROW_UNLESS(item.mesh < meshes.size(), "draw item " << i << " names mesh " << item.mesh << " of "
-                                                                << meshes.size());
-    SIM4CV_THROW_UNLESS(unoccluded_pixels.empty() || item.instance < unoccluded_pixels.size(),
-                        "instance " << item.instance << " does not fit unoccluded_pixels of size "
-                                    << unoccluded_pixels.size());
+    SIM4CV_THROW_UNLESS(item.mesh < meshes.size(),
+                        "draw item " << i << " names mesh " << item.mesh << " of " << meshes.size());
+    SIM4CV_THROW_UNLESS(
+        unoccluded_pixels.empty() || item.instance < unoccluded_pixels.size(),
+        "instance " << item.instance << " does not fit unoccluded_pixels of size " << unoccluded_pixels.size());
   }
   // Objects first, flat ground last: the depth test then rejects the ground
   // under the objects before its fragments are shaded (llvmpipe tests depth
@@ -314,10 +314,19 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
   if (full_rgb) program->look.Apply(look, camera_position, pass.shadow, camera.noise_seed);
   if ((rgb_look & ChannelProgram::kLamps) != 0) {
     const Eigen::Vector3f ahead = camera_position - 15.0f * camera.world_from_camera.block<3, 1>(0, 2);
-    const int count = NearestLamps(ahead);
+    const int count = Nearest(
+        lamps.size(), [&](uint32_t i) { return lamps[i]; }, ahead, kMaxLamps);
+    for (int i = 0; i < count; ++i)
+      nearest_lamps[static_cast<std::size_t>(i)] = lamps[light_order[static_cast<std::size_t>(i)].second];
     glUniform3fv(program->u_lamps, count, nearest_lamps[0].data());
     glUniform1i(program->u_lamp_count, count);
-    const int cars = NearestHeadlights(ahead);
+    const int cars = Nearest(
+        headlights.size(), [&](uint32_t i) { return headlights[i].position; }, ahead, kMaxHeadlights);
+    for (int i = 0; i < cars; ++i) {
+      const Headlight& car = headlights[light_order[static_cast<std::size_t>(i)].second];
+      nearest_headlights[static_cast<std::size_t>(i)] = car.position;
+      nearest_directions[static_cast<std::size_t>(i)] = car.direction;
+    }
     glUniform3fv(program->u_headlights, cars, nearest_headlights[0].data());
     glUniform3fv(program->u_headlight_directions, cars, nearest_directions[0].data());
     glUniform1i(program->u_headlight_count, cars);
@@ -326,32 +335,16 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
   if (full_rgb) {
     if (!sky) sky = std::make_unique<SkyPass>();
     sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * pass.view, camera_position, look, camera.noise_seed);
-    glUseProgram(program->id());  // the counting pass draws with the scene's program
   }
 }
 
-int Renderer::Impl::NearestLamps(const Eigen::Vector3f& point) {
-  lamp_order.clear();
-  for (uint32_t i = 0; i < lamps.size(); ++i) lamp_order.emplace_back((lamps[i] - point).squaredNorm(), i);
-  const auto count = static_cast<int>(std::min<std::size_t>(lamp_order.size(), kMaxLamps));
-  std::partial_sort(lamp_order.begin(), lamp_order.begin() + count, lamp_order.end());
-  for (int i = 0; i < count; ++i) nearest_lamps[static_cast<std::size_t>(i)] = lamps[lamp_order[static_cast<std::size_t>(i)].second];
-  return count;
-}
-
-int Renderer::Impl::NearestHeadlights(const Eigen::Vector3f& point) {
-  lamp_order.clear();
-  for (uint32_t i = 0; i < headlights.size(); ++i) {
-    lamp_order.emplace_back((headlights[i].position - point).squaredNorm(), i);
-  }
-  const auto count = static_cast<int>(std::min<std::size_t>(lamp_order.size(), kMaxHeadlights));
-  std::partial_sort(lamp_order.begin(), lamp_order.begin() + count, lamp_order.end());
-  for (int i = 0; i < count; ++i) {
-    const Headlight& car = headlights[lamp_order[static_cast<std::size_t>(i)].second];
-    nearest_headlights[static_cast<std::size_t>(i)] = car.position;
-    nearest_directions[static_cast<std::size_t>(i)] = car.direction;
-  }
-  return count;
+template <typename Position>
+int Renderer::Impl::Nearest(std::size_t count, Position position, const Eigen::Vector3f& point, int most) {
+  light_order.clear();
+  for (uint32_t i = 0; i < count; ++i) light_order.emplace_back((position(i) - point).squaredNorm(), i);
+  const auto nearest = static_cast<int>(std::min<std::size_t>(light_order.size(), static_cast<std::size_t>(most)));
+  std::partial_sort(light_order.begin(), light_order.begin() + nearest, light_order.end());
+  return nearest;
 }
 
 ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<const DrawItem> items) {
@@ -383,7 +376,8 @@ void Renderer::Impl::ReadBack(const CameraView& camera, const FrameBuffers& out,
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   for (GLuint i = 0; i < channels::kPixelChannelCount; ++i) {
     if (out[i] == nullptr) continue;
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, (through & (1u << i)) != 0 ? effects->framebuffer() : targets->framebuffer());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER,
+                      (through & (1u << i)) != 0 ? effects->framebuffer() : targets->framebuffer());
     glReadBuffer(GL_COLOR_ATTACHMENT0 + i);
     glReadPixels(0, 0, static_cast<GLsizei>(camera.width), static_cast<GLsizei>(camera.height),
                  kChannelOutputs[i]->read_format, kChannelOutputs[i]->read_type, out[i]);
@@ -394,7 +388,7 @@ void Renderer::Impl::RescaleUnoccluded(const CameraView& camera, const uint16_t*
                                        std::span<uint32_t> unoccluded_pixels) {
   const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
   scene_mask.resize(static_cast<std::size_t>(max_width) * max_height);  // once: the largest image
-  scene_visible.assign(unoccluded_pixels.size(), 0);  // no reallocation once warmed up
+  scene_visible.assign(unoccluded_pixels.size(), 0);                    // no reallocation once warmed up
   image_visible.assign(unoccluded_pixels.size(), 0);
   glBindFramebuffer(GL_READ_FRAMEBUFFER, targets->framebuffer());
   glReadBuffer(GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(kMaskPlane));
@@ -440,7 +434,7 @@ void Renderer::Impl::CountUnoccludedPixels(std::span<const DrawItem> items, std:
     }
     glBeginQuery(GL_SAMPLES_PASSED, queries[queried_instances.size()]);
     for (; first < labelled_drawn.size() && items[labelled_drawn[first]].instance == instance; ++first) {
-        Draw(items[labelled_drawn[first]]);
+      Draw(items[labelled_drawn[first]]);
     }
     glEndQuery(GL_SAMPLES_PASSED);
     queried_instances.push_back(instance);
@@ -472,21 +466,21 @@ void Renderer::SetLook(const Look& look) { impl_->look = look; }
 
 void Renderer::SetLamps(std::vector<Eigen::Vector3f> lamps) {
   impl_->lamps = std::move(lamps);
-  impl_->lamp_order.reserve(impl_->lamps.size());  // no allocation per frame
+  impl_->light_order.reserve(impl_->lamps.size());  // no allocation per frame
 }
 
 void Renderer::SetHeadlights(std::span<const Headlight> headlights) {
   impl_->headlights.assign(headlights.begin(), headlights.end());
-  if (impl_->lamp_order.capacity() < headlights.size()) impl_->lamp_order.reserve(headlights.size());
+  impl_->light_order.reserve(headlights.size());  // only grows: no allocation once the cars stop growing
 }
 
 void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items, const FrameBuffers& out,
                       std::span<uint32_t> unoccluded_pixels) {
   Impl& gl = *impl_;
-  SIM4CV_THROW_UNLESS(camera.width > 0 && camera.height > 0 && camera.width <= gl.max_width &&
-                          camera.height <= gl.max_height,
-                      "camera size " << camera.width << "x" << camera.height << " outside 1x1.." << gl.max_width
-                                     << "x" << gl.max_height);
+  SIM4CV_THROW_UNLESS(
+      camera.width > 0 && camera.height > 0 && camera.width <= gl.max_width && camera.height <= gl.max_height,
+      "camera size " << camera.width << "x" << camera.height << " outside 1x1.." << gl.max_width << "x"
+                     << gl.max_height);
   PlaneSet wanted = 0;
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     if (out[i] != nullptr) wanted |= 1u << i;
@@ -506,15 +500,15 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   const PlaneSet planes = ((wanted | inputs) & ~fine_planes) | (rescale ? 1u << kMaskPlane : 0u);
   if (through != 0 && !gl.effects) gl.effects = std::make_unique<EffectsPass>(gl.max_width, gl.max_height);
   const float widening = lens ? gl.effects->Prepare(camera) : 1.0f;
-  const Impl::Pass pass{camera, RigidInverse(camera.world_from_camera),
-                        Perspective(lens ? WidenedFov(camera.fov_y_deg, widening) : camera.fov_y_deg,
-                                    static_cast<float>(camera.width) / static_cast<float>(camera.height),
-                                    camera.near_m, camera.far_m),
-                        {}};
   const bool full_rgb = gl.look.full && (planes & (1u << kRgbPlane)) != 0;
   glBindVertexArray(gl.vertex_array);
   ShadowSampling shadow;
   if (full_rgb && gl.look.shadows) shadow = gl.DrawShadows(camera, items);
+  const Impl::Pass pass{
+      camera, RigidInverse(camera.world_from_camera),
+      Perspective(lens ? WidenedFov(camera.fov_y_deg, widening) : camera.fov_y_deg,
+                  static_cast<float>(camera.width) / static_cast<float>(camera.height), camera.near_m, camera.far_m),
+      shadow};
   uint32_t rgb_look = ChannelProgram::kFast;
   if (full_rgb) {
     rgb_look = ChannelProgram::kFull | (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
@@ -524,13 +518,11 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   constexpr uint32_t kFineScale = 2;
   if (fine_planes != 0) {
     if (!gl.fine) gl.fine = std::make_unique<RenderTargets>(kFineScale * gl.max_width, kFineScale * gl.max_height);
-    gl.DrawPass({pass.camera, pass.view, pass.projection, shadow}, items, *gl.fine, kFineScale, fine_planes,
-                ChannelProgram::kFast, {});
+    gl.DrawPass(pass, items, *gl.fine, kFineScale, fine_planes, ChannelProgram::kFast, {});
   }
   // Last, so the counting pass below finds this pass's stencil, program and viewport.
   if (planes != 0) {
-    gl.DrawPass({pass.camera, pass.view, pass.projection, shadow}, items, *gl.targets, 1, planes, rgb_look,
-                unoccluded_pixels);
+    gl.DrawPass(pass, items, *gl.targets, 1, planes, rgb_look, unoccluded_pixels);
   }
   if (through != 0) {
     gl.effects->Draw(camera, gl.targets->textures(), lens ? gl.fine->textures() : gl.targets->textures(),
