@@ -15,23 +15,24 @@
 
 namespace sim4cv::effects {
 
-// X(field, flag, default (off), min, max, unit, what it does): field is also
-// the name of the proto field in CameraEffects (sim4cv.proto).
+// X(field, flag, default (off), min, max, whole numbers only, unit, what it
+// does): field is also the name of the proto field in CameraEffects (sim4cv.proto).
 #define SIM4CV_CAMERA_EFFECTS(X)                                                                                    \
-  X(antialias, "antialias", 0, 0, 1, "", "edge smoothing of the RGB in a post pass (FXAA); 0 off, 1 on")            \
-  X(exposure_ev, "exposure-ev", 0, -4, 4, "EV",                                                                     \
+  X(antialias, "antialias", 0, 0, 1, true, "", "edge smoothing of the RGB in a post pass (FXAA); 0 off, 1 on")      \
+  X(exposure_ev, "exposure-ev", 0, -4, 4, false, "EV",                                                              \
     "exposure compensation: linear light times 2^EV, so bright parts clip")                                         \
-  X(white_balance_k, "white-balance", 6500, 2000, 12000, "K",                                                       \
+  X(white_balance_k, "white-balance", 6500, 2000, 12000, false, "K",                                                \
     "the light colour the camera balances for; 6500 leaves the colours, lower turns the image blue, higher orange") \
-  X(motion_blur, "motion-blur", 0, 0, 1, "frames",                                                                  \
+  X(motion_blur, "motion-blur", 0, 0, 1, false, "frames",                                                           \
     "shutter time as a fraction of the frame period: the RGB is smeared along each pixel's motion, centred on the " \
     "rendered instant")                                                                                             \
-  X(k1, "lens-k1", 0, -1, 1, "", "radial distortion, r^2 term (OpenCV's radial-tangential model)")                  \
-  X(k2, "lens-k2", 0, -1, 1, "", "radial distortion, r^4 term")                                                     \
-  X(p1, "lens-p1", 0, -0.1, 0.1, "", "tangential distortion p1")                                                    \
-  X(p2, "lens-p2", 0, -0.1, 0.1, "", "tangential distortion p2")                                                    \
-  X(k3, "lens-k3", 0, -1, 1, "", "radial distortion, r^6 term")                                                     \
-  X(jpeg_quality, "jpeg", 0, 0, 100, "", "JPEG compression of the RGB at this quality (1 worst .. 100 best); 0 off")
+  X(k1, "lens-k1", 0, -1, 1, false, "", "radial distortion, r^2 term (OpenCV's radial-tangential model)")           \
+  X(k2, "lens-k2", 0, -1, 1, false, "", "radial distortion, r^4 term")                                              \
+  X(p1, "lens-p1", 0, -0.1, 0.1, false, "", "tangential distortion p1")                                             \
+  X(p2, "lens-p2", 0, -0.1, 0.1, false, "", "tangential distortion p2")                                             \
+  X(k3, "lens-k3", 0, -1, 1, false, "", "radial distortion, r^6 term")                                              \
+  X(jpeg_quality, "jpeg", 0, 0, 100, true, "",                                                                      \
+    "JPEG compression of the RGB at this quality (1 worst .. 100 best); 0 off")
 
 struct CameraEffects {
 #define SIM4CV_EFFECT_FIELD(FIELD, FLAG, OFF, ...) double FIELD = OFF;
@@ -45,12 +46,13 @@ struct EffectInfo {
   std::string_view field;  // in CameraEffects, the proto and Python
   std::string_view flag;   // the daemon's --flag
   double off, min, max;
+  bool whole;  // whole numbers only (a switch, a quality)
   std::string_view unit, summary;
   double CameraEffects::*member;
 };
 
-#define SIM4CV_EFFECT_INFO(FIELD, FLAG, OFF, MIN, MAX, UNIT, SUMMARY) \
-  EffectInfo{#FIELD, FLAG, OFF, MIN, MAX, UNIT, SUMMARY, &CameraEffects::FIELD},
+#define SIM4CV_EFFECT_INFO(FIELD, FLAG, OFF, MIN, MAX, WHOLE, UNIT, SUMMARY) \
+  EffectInfo{#FIELD, FLAG, OFF, MIN, MAX, WHOLE, UNIT, SUMMARY, &CameraEffects::FIELD},
 inline const std::array kEffects = {SIM4CV_CAMERA_EFFECTS(SIM4CV_EFFECT_INFO)};
 #undef SIM4CV_EFFECT_INFO
 
@@ -61,13 +63,16 @@ inline const std::array kEffects = {SIM4CV_CAMERA_EFFECTS(SIM4CV_EFFECT_INFO)};
 // that lie past its fold are black and hold no ground truth.
 inline constexpr double kLensCheckRadius = 0.5;
 
-// The undistorted radius where the radial part of `e` folds (its derivative
-// d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)] reaches 0), or 1e9 if it does not
-// before r = 10.
-inline double FoldRadius(double k1, double k2, double k3) {
+// The radial factor 1 + k1 r^2 + k2 r^4 + k3 r^6 at r^2 = `r2`.
+inline double Radial(const CameraEffects& e, double r2) { return 1 + r2 * (e.k1 + r2 * (e.k2 + r2 * e.k3)); }
+
+// The undistorted radius where the radial map r -> r Radial(r^2) folds (its
+// derivative 1 + 3 k1 r^2 + 5 k2 r^4 + 7 k3 r^6 reaches 0), or 1e9 if it
+// does not before r = 10.
+inline double FoldRadius(const CameraEffects& e) {
   for (int i = 1; i <= 10000; ++i) {
     const double r = i * 1e-3, r2 = r * r;
-    if (1 + 3 * k1 * r2 + 5 * k2 * r2 * r2 + 7 * k3 * r2 * r2 * r2 <= 0) return r;
+    if (1 + r2 * (3 * e.k1 + r2 * (5 * e.k2 + r2 * 7 * e.k3)) <= 0) return r;
   }
   return 1e9;
 }
@@ -84,7 +89,7 @@ inline bool NeedsPass(const CameraEffects& e) {
 // OpenCV's model on normalised image coordinates (x = X/Z, y = Y/Z).
 inline void Distort(const CameraEffects& e, double x, double y, double& xd, double& yd) {
   const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (e.k1 + r2 * (e.k2 + r2 * e.k3));
+  const double radial = Radial(e, r2);
   xd = x * radial + 2 * e.p1 * x * y + e.p2 * (r2 + 2 * x * x);
   yd = y * radial + e.p1 * (r2 + 2 * y * y) + 2 * e.p2 * x * y;
 }
@@ -120,10 +125,10 @@ inline bool Undistort(const CameraEffects& e, double xd, double yd, double& x, d
   return std::abs(fx - xd) < 1e-9 && std::abs(fy - yd) < 1e-9;
 }
 
-// Empty if every field is in its range and the lens does not fold the image;
-// otherwise a message naming the value and what is allowed. `where` prefixes
-// field names ("--" for flags, "SetEffects." for Configure).
-inline std::string Check(const CameraEffects& e, bool flags) {
+// Empty if every field is in its range (and whole where it must be);
+// otherwise a message naming the value and what is allowed. `flags`: name
+// fields by their flag (--motion-blur), else as SetEffects.motion_blur.
+inline std::string CheckRanges(const CameraEffects& e, bool flags) {
   std::ostringstream message;
   for (const EffectInfo& info : kEffects) {
     const double value = e.*info.member;
@@ -133,19 +138,33 @@ inline std::string Check(const CameraEffects& e, bool flags) {
       if (!info.unit.empty()) message << " " << info.unit;
       return message.str();
     }
-    if ((info.field == "antialias" || info.field == "jpeg_quality") && value != std::floor(value)) {
+    if (info.whole && value != std::floor(value)) {
       message << name << " " << value << " is not a whole number";
       return message.str();
     }
   }
-  const double fold = FoldRadius(e.k1, e.k2, e.k3), f2 = fold * fold;
-  const double reached = fold * (1 + f2 * (e.k1 + f2 * (e.k2 + f2 * e.k3)));
+  return {};
+}
+
+// Empty unless the lens folds the image before kLensCheckRadius; then a
+// message naming the coefficients. Only a whole lens can be judged: a
+// coefficient that folds alone may be balanced by another.
+inline std::string CheckLens(const CameraEffects& e) {
+  const double fold = FoldRadius(e);
+  const double reached = fold * Radial(e, fold * fold);
   if (fold < 1e9 && reached < kLensCheckRadius) {
+    std::ostringstream message;
     message << "the lens k1=" << e.k1 << " k2=" << e.k2 << " k3=" << e.k3 << " folds the image at radius " << reached
             << " (tan of the angle off axis; it must reach " << kLensCheckRadius << "): use smaller coefficients";
     return message.str();
   }
   return {};
+}
+
+// CheckRanges, then CheckLens: the effects a camera will use.
+inline std::string Check(const CameraEffects& e, bool flags) {
+  std::string problem = CheckRanges(e, flags);
+  return problem.empty() ? CheckLens(e) : problem;
 }
 
 // "antialias 1, motion_blur 0.5" (the effects that are on), or "none".

@@ -427,7 +427,7 @@ void Simulation::SetConditions(const proto::SetConditions& request, Change& chan
 void Simulation::SetEffects(const proto::CameraEffects& request, Change& change) {
   effects::CameraEffects next = effects_;
   session::ApplyEffects(request, next);
-  const std::string problem = effects::Check(next, false);
+  const std::string problem = effects::CheckLens(next);  // each field's range was checked on arrival
   if (!problem.empty()) throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, problem);
   effects_ = next;
   change.new_effects = true;

@@ -16,7 +16,7 @@ LensMap MakeLensMap(const CameraView& view) {
   // First the undistorted normalised point of every pixel centre, then the
   // widening that keeps the farthest of them half a pixel inside the render.
   double reach = 0.0;
-  const double fold = effects::FoldRadius(view.effects.k1, view.effects.k2, view.effects.k3);
+  const double fold = effects::FoldRadius(view.effects);
   for (uint32_t row = 0; row < view.height; ++row) {
     for (uint32_t column = 0; column < view.width; ++column) {
       double x = 0, y = 0;

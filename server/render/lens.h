@@ -19,7 +19,7 @@ struct LensMap {
   float widening = 1.0f;
   // Per pixel of the distorted image, top row first: the continuous pixel
   // position (column, row; centres at +0.5) in the pinhole render that it
-  // shows, or (-1, -1) past the lens's fold (effects::kLensCheckRadius).
+  // shows, or (-1, -1) past the lens's fold (effects::FoldRadius).
   std::vector<float> source;  // 2 * width * height
 };
 

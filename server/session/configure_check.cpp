@@ -196,12 +196,12 @@ std::string CheckSetConditions(const proto::SetConditions& request) {
   return check.problem();
 }
 
-// Ranges of the fields present; whether a lens folds (on top of the effects
-// in force) is the sim thread's to say (Simulation::SetEffects).
+// Ranges of the fields present; whether the lens folds depends on the
+// coefficients in force too, so the sim thread says (Simulation::SetEffects).
 std::string CheckSetEffects(const proto::CameraEffects& request) {
   effects::CameraEffects asked;
   ApplyEffects(request, asked);
-  return effects::Check(asked, false);
+  return effects::CheckRanges(asked, false);
 }
 
 }  // namespace

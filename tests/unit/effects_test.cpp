@@ -84,6 +84,9 @@ TEST(EffectsTableTest, BadValuesAreNamedWithTheirRange) {
   EXPECT_EQ(effects::Check(e, true).rfind("the lens k1=-0.9 k2=0 k3=0 folds the image at radius 0.40", 0), 0u)
       << effects::Check(e, true);
   EXPECT_EQ(effects::Check(Lens(), true), "");
+  EXPECT_EQ(effects::CheckRanges(e, false), "") << "a folding coefficient is in range; only a whole lens folds";
+  e.k2 = 0.5;  // balances k1: 1 - 2.7 r^2 + 2.5 r^4 never reaches 0
+  EXPECT_EQ(effects::CheckLens(e), "");
   e = {};
   e.k1 = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(effects::Check(e, false), "SetEffects.k1 nan is outside -1..1");
