@@ -181,9 +181,10 @@ int main(int argc, char** argv) {
   }
   RenderTimer timer{states, graphics, renderer, width, height, scene.cameras[0], look};
   const bench::Summary base = timer.Run(kBaseChannels);
-  std::printf("render: %d frames (rgb,depth,mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: "
-              "%.0f fps\n",
-              frames, base.median, base.p99, base.max, 1e3 / base.mean);
+  std::printf(
+      "render: %d frames (rgb,depth,mask read back, boxes): median %.3f ms, p99 %.3f ms, max %.3f ms: "
+      "%.0f fps\n",
+      frames, base.median, base.p99, base.max, 1e3 / base.mean);
   // Each further channel's cost: the same frames with it added (docs/benchmarks.md).
   for (const channels::ChannelInfo& info : channels::kPixelChannels) {
     if (channels::Has(kBaseChannels, info.id)) continue;
@@ -216,30 +217,19 @@ int main(int argc, char** argv) {
 
   // What each camera effect adds to the look asked for (rgb,depth,mask and
   // boxes): every frame rendered without effects, then with each, in turn.
-  effects::CameraEffects lens;
-  lens.k1 = -0.28;
-  lens.k2 = 0.07;
-  lens.p1 = 0.002;
-  lens.p2 = -0.0015;
-  lens.k3 = -0.005;
-  std::vector<std::pair<std::string, effects::CameraEffects>> cases;
-  const auto add = [&](const char* name, double effects::CameraEffects::*field, double value) {
-    effects::CameraEffects e;
-    e.*field = value;
-    cases.emplace_back(name, e);
-  };
-  add("antialias", &effects::CameraEffects::antialias, 1);
-  add("exposure+wb", &effects::CameraEffects::white_balance_k, 4000);
-  cases.back().second.exposure_ev = 0.5;
-  add("motion blur", &effects::CameraEffects::motion_blur, 1);
-  cases.emplace_back("lens", lens);
-  add("jpeg 60", &effects::CameraEffects::jpeg_quality, 60);
-  effects::CameraEffects all = lens;
+  using effects::CameraEffects;
+  using effects::Only;
+  CameraEffects exposure_and_white = Only(&CameraEffects::white_balance_k, 4000);
+  exposure_and_white.exposure_ev = 0.5;
+  CameraEffects all = effects::WideAngleLens();
   all.antialias = 1;
   all.motion_blur = 0.5;
   all.white_balance_k = 4000;
   all.jpeg_quality = 60;
-  cases.emplace_back("all", all);
+  const std::vector<std::pair<std::string, CameraEffects>> cases = {
+      {"antialias", Only(&CameraEffects::antialias, 1)},     {"exposure+wb", exposure_and_white},
+      {"motion blur", Only(&CameraEffects::motion_blur, 1)}, {"lens", effects::WideAngleLens()},
+      {"jpeg 60", Only(&CameraEffects::jpeg_quality, 60)},   {"all", all}};
   std::vector<RenderTimer::Variant> variants = {{look, {}}};
   for (const auto& entry : cases) variants.push_back({look, entry.second});
   const std::vector<bench::Summary> timed = timer.Interleaved(kBaseChannels, variants);

@@ -56,6 +56,25 @@ struct EffectInfo {
 inline const std::array kEffects = {SIM4CV_CAMERA_EFFECTS(SIM4CV_EFFECT_INFO)};
 #undef SIM4CV_EFFECT_INFO
 
+// The effects with one of them on: Only(&CameraEffects::motion_blur, 1).
+inline CameraEffects Only(double CameraEffects::*member, double value) {
+  CameraEffects e;
+  e.*member = value;
+  return e;
+}
+
+// A wide-angle action camera's barrel lens with a little decentring: the
+// lens the gallery, the render benchmark and the tests show.
+inline CameraEffects WideAngleLens() {
+  CameraEffects lens;
+  lens.k1 = -0.28;
+  lens.k2 = 0.07;
+  lens.p1 = 0.002;
+  lens.p2 = -0.0015;
+  lens.k3 = -0.005;
+  return lens;
+}
+
 // A barrel lens (negative k1) stops spreading the image at some radius
 // and then folds it back: OpenCV's model means nothing past there. A lens
 // must keep spreading at least until the distorted image reaches this radius

@@ -40,12 +40,18 @@ int main(int argc, char** argv) try {
   std::filesystem::path out;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--out") out = argv[i + 1];
-    else if (flag == "--map") map_file = argv[i + 1];
-    else if (flag == "--width") width = static_cast<uint32_t>(std::stoi(argv[i + 1]));
-    else if (flag == "--height") height = static_cast<uint32_t>(std::stoi(argv[i + 1]));
-    else if (flag == "--steps") steps = std::stoi(argv[i + 1]);
-    else throw std::runtime_error("unknown flag " + flag);
+    if (flag == "--out")
+      out = argv[i + 1];
+    else if (flag == "--map")
+      map_file = argv[i + 1];
+    else if (flag == "--width")
+      width = static_cast<uint32_t>(std::stoi(argv[i + 1]));
+    else if (flag == "--height")
+      height = static_cast<uint32_t>(std::stoi(argv[i + 1]));
+    else if (flag == "--steps")
+      steps = std::stoi(argv[i + 1]);
+    else
+      throw std::runtime_error("unknown flag " + flag);
   }
   if (out.empty()) throw std::runtime_error("usage: sim4cv_gallery --out DIR [--map FILE] [--width W] [--height H]");
   std::filesystem::create_directories(out);
@@ -86,17 +92,19 @@ int main(int argc, char** argv) try {
   for (const traffic::Walker& walker : state.traffic.walkers) {
     if (walker.linear_velocity.norm() < 0.5) continue;
     const Eigen::Vector3f target = walker.position.cast<float>() + Eigen::Vector3f(0, 0, 1.0f);
-    const Eigen::Vector3f side(-std::sin(static_cast<float>(walker.heading)), std::cos(static_cast<float>(walker.heading)), 0);
+    const Eigen::Vector3f side(-std::sin(static_cast<float>(walker.heading)),
+                               std::cos(static_cast<float>(walker.heading)), 0);
     render::CameraView view = views.front().second;
-    view.world_from_camera = render::LookAt(target + 8.0f * side + Eigen::Vector3f(2.0f, 0, 0.6f), target,
-                                            Eigen::Vector3f::UnitZ());
+    view.world_from_camera =
+        render::LookAt(target + 8.0f * side + Eigen::Vector3f(2.0f, 0, 0.6f), target, Eigen::Vector3f::UnitZ());
     views.emplace_back("walkers", view);
     break;
   }
   std::vector<cv::Mat> rows;  // one per look, the views side by side: sheet.png
   for (std::size_t i = 0; i < views.size(); ++i) {
-    views[i].second.previous_world_from_camera =
-        i < previous.size() ? previous[i].world_from_camera : views[i].second.world_from_camera;  // the walker cam stands
+    views[i].second.previous_world_from_camera = i < previous.size()
+                                                     ? previous[i].world_from_camera
+                                                     : views[i].second.world_from_camera;  // the walker cam stands
   }
   const auto render_all = [&](const std::string& look_name, const render::Look& look,
                               const effects::CameraEffects& camera_effects = {}) {
@@ -125,35 +133,20 @@ int main(int argc, char** argv) try {
     render_all("randomised_" + std::to_string(draw), render::LookOf(conditions::Randomized(2026, draw, {})));
   }
   const render::Look noon = render::LookOf(conditions::Of(conditions::Preset::CLEAR_NOON));
-  effects::CameraEffects e;
-  e.antialias = 1;
-  render_all("antialias", noon, e);
-  e = {};
-  e.exposure_ev = 1;
-  render_all("exposure_plus_1ev", noon, e);
-  e = {};
-  e.white_balance_k = 3200;
-  render_all("white_balance_3200k", noon, e);
-  e = {};
-  e.motion_blur = 1;
-  render_all("motion_blur", noon, e);
-  e = {};
-  e.k1 = -0.28;
-  e.k2 = 0.07;
-  e.p1 = 0.002;
-  e.p2 = -0.0015;
-  e.k3 = -0.005;
-  render_all("lens", noon, e);
-  effects::CameraEffects lens = e;
-  e = {};
-  e.jpeg_quality = 15;
-  render_all("jpeg_15", noon, e);
+  using effects::CameraEffects;
+  using effects::Only;
+  render_all("antialias", noon, Only(&CameraEffects::antialias, 1));
+  render_all("exposure_plus_1ev", noon, Only(&CameraEffects::exposure_ev, 1));
+  render_all("white_balance_3200k", noon, Only(&CameraEffects::white_balance_k, 3200));
+  render_all("motion_blur", noon, Only(&CameraEffects::motion_blur, 1));
+  render_all("lens", noon, effects::WideAngleLens());
+  render_all("jpeg_15", noon, Only(&CameraEffects::jpeg_quality, 15));
   // A cheap action camera: lens, half-frame shutter, sensor noise, JPEG.
-  e = lens;
-  e.motion_blur = 0.5;
-  e.jpeg_quality = 60;
-  e.antialias = 1;
-  render_all("action_camera", render::LookOf(noisy), e);
+  CameraEffects action = effects::WideAngleLens();
+  action.motion_blur = 0.5;
+  action.jpeg_quality = 60;
+  action.antialias = 1;
+  render_all("action_camera", render::LookOf(noisy), action);
   cv::Mat sheet;
   cv::vconcat(rows, sheet);
   cv::imwrite((out / "sheet.png").string(), sheet);

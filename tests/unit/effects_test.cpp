@@ -33,15 +33,7 @@
 namespace sim4cv::render {
 namespace {
 
-effects::CameraEffects Lens() {
-  effects::CameraEffects lens;
-  lens.k1 = -0.28;  // a wide-angle action camera's barrel, with a little decentring
-  lens.k2 = 0.07;
-  lens.p1 = 0.002;
-  lens.p2 = -0.0015;
-  lens.k3 = -0.005;
-  return lens;
-}
+effects::CameraEffects Lens() { return effects::WideAngleLens(); }
 
 TEST(EffectsTableTest, EveryEffectIsOffByDefaultAndHasItsProtoField) {
   EXPECT_FALSE(effects::Any(effects::CameraEffects{}));
@@ -249,29 +241,18 @@ double Mean(const std::vector<uint8_t>& rgb, int c) {
 }
 
 TEST_F(EffectsRenderTest, RgbEffectsLeaveEveryGroundTruthChannelByteIdenticalAndRepeat) {
-  const std::vector<std::pair<std::string, effects::CameraEffects>> cases = [] {
-    std::vector<std::pair<std::string, effects::CameraEffects>> all;
-    effects::CameraEffects e;
-    e.antialias = 1;
-    all.emplace_back("antialias", e);
-    e = {};
-    e.exposure_ev = 1.0;
-    all.emplace_back("exposure", e);
-    e = {};
-    e.white_balance_k = 3200;
-    all.emplace_back("white balance", e);
-    e = {};
-    e.motion_blur = 1.0;
-    all.emplace_back("motion blur", e);
-    e = {};
-    e.jpeg_quality = 30;
-    all.emplace_back("jpeg", e);
-    e.antialias = 1;
-    e.motion_blur = 0.5;
-    e.white_balance_k = 9000;
-    all.emplace_back("all but the lens", e);
-    return all;
-  }();
+  using effects::CameraEffects;
+  CameraEffects several = effects::Only(&CameraEffects::jpeg_quality, 30);
+  several.antialias = 1;
+  several.motion_blur = 0.5;
+  several.white_balance_k = 9000;
+  const std::vector<std::pair<std::string, CameraEffects>> cases = {
+      {"antialias", effects::Only(&CameraEffects::antialias, 1)},
+      {"exposure", effects::Only(&CameraEffects::exposure_ev, 1.0)},
+      {"white balance", effects::Only(&CameraEffects::white_balance_k, 3200)},
+      {"motion blur", effects::Only(&CameraEffects::motion_blur, 1.0)},
+      {"jpeg", effects::Only(&CameraEffects::jpeg_quality, 30)},
+      {"all but the lens", several}};
   for (std::size_t camera = 0; camera < scene_->cameras.size(); ++camera) {
     SCOPED_TRACE(scene_->cameras[camera].name);
     const Shot plain = Render(camera, {});
