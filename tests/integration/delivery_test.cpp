@@ -4,9 +4,9 @@
 #include <chrono>
 #include <iostream>
 #include <thread>
-#include <vector>
 
 #include "tests/integration/daemon_fixture.h"
+#include "tests/support/frame_ages.h"
 
 namespace sim4cv::testing {
 namespace {
@@ -61,19 +61,14 @@ TEST_F(DaemonTest, SlowNewestFrameClientDropsAndCountsFrames) {
   EXPECT_GT(next.frame_id(), after_pause);
 }
 
-int64_t MonotonicNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 // Frame ages (render end to the whole frame in hand, ms) of a reader that
 // wants a frame every 100 ms from a 30 Hz stream of 320x180 RGB, depth and
 // mask: `on_request` asks with NextFrame, else it reads what newest-frame
 // delivery pushed.
-std::vector<double> AgesOfASlowReader(Client& client, bool on_request, int reads) {
+FrameAges AgesOfASlowReader(Client& client, bool on_request, int reads) {
   client.Subscribe("uav", {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_BOXES},
                    on_request ? proto::DELIVERY_ON_REQUEST : proto::DELIVERY_NEWEST);
-  std::vector<double> ages;
+  FrameAges ages;
   uint64_t last = 0;
   proto::Frame pushed;
   for (int i = 0; i < reads; ++i) {
@@ -84,16 +79,11 @@ std::vector<double> AgesOfASlowReader(Client& client, bool on_request, int reads
     } else {
       EXPECT_TRUE(client.ReceiveFrame(pushed, 5000ms));
     }
-    ages.push_back(static_cast<double>(MonotonicNs() - frame->render_end_mono_ns()) / 1e6);
+    ages.Add(frame->render_end_mono_ns());
     EXPECT_GT(frame->frame_id(), last);
     last = frame->frame_id();
   }
   return ages;
-}
-
-double Percentile(std::vector<double> values, double p) {
-  std::sort(values.begin(), values.end());
-  return values[static_cast<std::size_t>(p * static_cast<double>(values.size() - 1))];
 }
 
 // On-request delivery (docs/protocol.md 7.3): what a tracker asks for is the
@@ -103,16 +93,15 @@ double Percentile(std::vector<double> values, double p) {
 TEST_F(DaemonTest, OnRequestFramesAreAtMostAFramePeriodOld) {
   StartDaemon({"--mode", "realtime", "--frame-hz", "30"});
   auto client = Connect("tracker");
-  const std::vector<double> asked = AgesOfASlowReader(*client, true, 20);
+  const FrameAges asked = AgesOfASlowReader(*client, true, 20);
   proto::Frame extra;
   EXPECT_FALSE(client->ReceiveFrame(extra, 300ms)) << "a frame nobody asked for";
-  const std::vector<double> pushed = AgesOfASlowReader(*client, false, 20);
-  std::cout << "[ numbers  ] frame age at 10 Hz of 30 Hz: on request median " << Percentile(asked, 0.5) << " ms, 90% "
-            << Percentile(asked, 0.9) << " ms, worst " << Percentile(asked, 1.0) << " ms; newest (pushed) median "
-            << Percentile(pushed, 0.5) << " ms, worst " << Percentile(pushed, 1.0) << " ms\n";
+  const FrameAges pushed = AgesOfASlowReader(*client, false, 20);
+  asked.Print("TCP frame age at 10 Hz of 30 Hz, on request");
+  pushed.Print("TCP frame age at 10 Hz of 30 Hz, newest (pushed)");
   // A period plus transfer, with room for a loaded 2-core machine.
-  EXPECT_LT(Percentile(asked, 0.5), 33.0 + 20.0);
-  EXPECT_LT(Percentile(asked, 0.9), 33.0 + 60.0);
+  EXPECT_LT(asked.Percentile(0.5), 33.0 + 20.0);
+  EXPECT_LT(asked.Percentile(0.9), 33.0 + 60.0);
 }
 
 // An on-request subscriber that asks for nothing never holds lockstep back.
@@ -149,10 +138,6 @@ TEST_F(DaemonTest, ClientThatStopsReadingDoesNotSlowOthers) {
   ASSERT_TRUE(reader->ReceiveFrame(frame, 5000ms));
   const uint64_t first = frame.frame_id();
   const uint64_t dropped_before = frame.dropped_frames();
-  const auto monotonic_ns = [] {
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-  };
   const auto start = std::chrono::steady_clock::now();
   auto last_arrival = start;
   std::chrono::steady_clock::duration longest_wait{};
@@ -164,7 +149,7 @@ TEST_F(DaemonTest, ClientThatStopsReadingDoesNotSlowOthers) {
     longest_wait = std::max(longest_wait, now - last_arrival);
     last_arrival = now;
     // Same host, same clock (CLOCK_MONOTONIC): render end to arrival.
-    worst_latency_ns = std::max(worst_latency_ns, monotonic_ns() - frame.render_end_mono_ns());
+    worst_latency_ns = std::max(worst_latency_ns, MonotonicNs() - frame.render_end_mono_ns());
     ++received;
   }
   const uint64_t produced = frame.frame_id() - first;

@@ -6,12 +6,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
-#include <iostream>
 #include <thread>
 #include <vector>
 
 #include "protocol/shm_sync.h"
 #include "tests/integration/shm_fixture.h"
+#include "tests/support/frame_ages.h"
 
 namespace sim4cv::testing {
 namespace {
@@ -263,21 +263,16 @@ TEST_F(ShmDaemonTest, TheNewestSlotIsAtMostAFramePeriodOld) {
   StartShmDaemon({"--mode", "realtime", "--frame-hz", "30"});
   auto shm = OpenShm();
   ASSERT_TRUE(shm->WaitForFrame(0, std::chrono::milliseconds(10000)));
-  std::vector<double> ages;
+  FrameAges ages;
   OwnedFrame frame;
   for (int i = 0; i < 20; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     ASSERT_TRUE(shm->ReadNewest(frame));
-    const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                            std::chrono::steady_clock::now().time_since_epoch())
-                            .count();
-    ages.push_back(static_cast<double>(now - frame.render_end_mono_ns) / 1e6);
+    ages.Add(frame.render_end_mono_ns);
   }
-  std::sort(ages.begin(), ages.end());
-  std::cout << "[ numbers  ] shm frame age at 10 Hz of 30 Hz: median " << ages[ages.size() / 2] << " ms, 90% "
-            << ages[ages.size() * 9 / 10] << " ms, worst " << ages.back() << " ms\n";
-  EXPECT_LT(ages[ages.size() / 2], 33.0 + 20.0);
-  EXPECT_LT(ages[ages.size() * 9 / 10], 33.0 + 60.0);
+  ages.Print("shm frame age at 10 Hz of 30 Hz, newest slot");
+  EXPECT_LT(ages.Percentile(0.5), 33.0 + 20.0);
+  EXPECT_LT(ages.Percentile(0.9), 33.0 + 60.0);
 }
 
 }  // namespace

@@ -3,12 +3,10 @@
 // datagrams; the version check; registration expiry; keep-alives.
 #include <chrono>
 #include <cmath>
-#include <algorithm>
-#include <iostream>
 #include <thread>
-#include <vector>
 
 #include "tests/integration/udp_fixture.h"
+#include "tests/support/frame_ages.h"
 
 namespace sim4cv::testing {
 namespace {
@@ -188,26 +186,21 @@ TEST_F(UdpDaemonTest, OnRequestFramesAreAtMostAFramePeriodOld) {
   auto client = ConnectUdp("udp-tracker");
   client->Subscribe("uav", {proto::CHANNEL_RGB, proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_BOXES},
                     proto::DELIVERY_ON_REQUEST);
-  std::vector<double> ages;
+  FrameAges ages;
   proto::Frame frame;
   uint64_t last = 0;
   for (int i = 0; i < 20; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     ASSERT_TRUE(client->RequestFrame(frame, std::chrono::milliseconds(5000)));
-    const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                            std::chrono::steady_clock::now().time_since_epoch())
-                            .count();
-    ages.push_back(static_cast<double>(now - frame.render_end_mono_ns()) / 1e6);
+    ages.Add(frame.render_end_mono_ns());
     EXPECT_GT(frame.frame_id(), last);
     last = frame.frame_id();
   }
   proto::Frame extra;
   EXPECT_FALSE(client->ReceiveFrame(extra, std::chrono::milliseconds(300))) << "a frame nobody asked for";
-  std::sort(ages.begin(), ages.end());
-  std::cout << "[ numbers  ] UDP frame age at 10 Hz of 30 Hz, on request: median " << ages[ages.size() / 2]
-            << " ms, 90% " << ages[ages.size() * 9 / 10] << " ms, worst " << ages.back() << " ms\n";
-  EXPECT_LT(ages[ages.size() / 2], 33.0 + 20.0);
-  EXPECT_LT(ages[ages.size() * 9 / 10], 33.0 + 60.0);
+  ages.Print("UDP frame age at 10 Hz of 30 Hz, on request");
+  EXPECT_LT(ages.Percentile(0.5), 33.0 + 20.0);
+  EXPECT_LT(ages.Percentile(0.9), 33.0 + 60.0);
 }
 
 }  // namespace
