@@ -124,24 +124,28 @@ vec3 Rgb(vec2 q, ivec2 t) {
 #endif
 )";
 
-const char* Swizzle(const char* glsl_type) {
-  const std::string type = glsl_type;
-  return type == "vec4" ? "" : type == "vec3" ? ".rgb" : type == "vec2" ? ".rg" : ".r";
+// Components of a fragment output's GLSL type: vecN has N, a scalar 1.
+std::size_t Components(const std::string& glsl_type) {
+  return glsl_type.rfind("vec", 0) == 0 ? static_cast<std::size_t>(glsl_type[3] - '0') : 1;
+}
+
+// What of a texelFetch (always four components) an output of that type takes.
+std::string Swizzle(const std::string& glsl_type) {
+  const std::size_t n = Components(glsl_type);
+  return n == 4 ? std::string() : std::string(".rgba").substr(0, n + 1);
 }
 
 // The channel's clear value (what it holds where nothing was drawn) as GLSL.
 std::string ClearValue(const ChannelOutput& output) {
-  const std::string type = output.glsl_type;
-  const int components = type == "vec4" ? 4 : type == "vec3" ? 3 : type == "vec2" ? 2 : 1;
-  std::string value = type + "(";
-  for (int c = 0; c < components; ++c) {
+  std::string value = std::string(output.glsl_type) + "(";
+  for (std::size_t c = 0; c < Components(output.glsl_type); ++c) {
     if (c > 0) value += ", ";
     if (output.integer) {
-      value += std::to_string(output.clear_integer[static_cast<std::size_t>(c)]) + "u";
-    } else if (std::isinf(output.clear_float[static_cast<std::size_t>(c)])) {
+      value += std::to_string(output.clear_integer[c]) + "u";
+    } else if (std::isinf(output.clear_float[c])) {
       value += "uintBitsToFloat(0x7f800000u)";
     } else {
-      value += std::to_string(output.clear_float[static_cast<std::size_t>(c)]);
+      value += std::to_string(output.clear_float[c]);
     }
   }
   return value + ")";
@@ -165,10 +169,10 @@ std::string FragmentShader(PlaneSet through, PlaneSet inputs, uint32_t variant) 
     declarations += "layout(location = " + std::to_string(i) + ") out " + output.glsl_type + " " + out + ";\n";
     const std::string fetched = "texelFetch(" + sampler + ", t, 0)" + Swizzle(output.glsl_type);
     // Past a lens's fold the image is black and holds nothing (lens.h).
-    const std::string outside = (variant & kLens) ? "  if (!inside) " + out + " = " +
-                                                        (i == kRgbPlane ? "vec4(0.0, 0.0, 0.0, 1.0)" : ClearValue(output)) +
-                                                        ";\n"
-                                                  : "";
+    const std::string outside = (variant & kLens)
+                                    ? "  if (!inside) " + out + " = " +
+                                          (i == kRgbPlane ? "vec4(0.0, 0.0, 0.0, 1.0)" : ClearValue(output)) + ";\n"
+                                    : "";
     if (i == kRgbPlane) {
       body += "  " + out + " = vec4(Rgb(q, t), 1.0);\n" + outside;
     } else if (i == kFlowPlane && (variant & kLens)) {
