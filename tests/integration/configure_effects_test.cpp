@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "server/session/effects_wire.h"
 #include "tests/integration/run_to_exit.h"
 #include "tests/support/configure_fixture.h"
 
@@ -88,11 +89,7 @@ TEST_F(EffectsTest, EveryEffectKeepsBoxesTheTightBoxesOfTheMaskAndRgbEffectsChan
     SCOPED_TRACE(name);
     client->Reset();
     proto::CameraEffects off;  // every field back to its default
-    for (const char* field :
-         {"antialias", "exposure_ev", "motion_blur", "k1", "k2", "p1", "p2", "k3", "jpeg_quality"}) {
-      off.GetReflection()->SetDouble(&off, off.GetDescriptor()->FindFieldByName(field), 0.0);
-    }
-    off.set_white_balance_k(6500);
+    session::FillEffects(effects::CameraEffects{}, off);
     client->SetEffects(off);
     const proto::WorldInfo world = client->SetEffects(Each(name));
     const proto::Frame frame = StepFrames(*client, 45);
