@@ -14,268 +14,27 @@ It also changes the world (docs/protocol.md, "Configuring the world"):
         c.add_camera("uav_b_cam", mounted_on="uav_b", pitch_down_deg=45, gimbal=True)
         c.uav_velocity(uav, 2, 0, 0)
 
-Wire format (docs/protocol.md, "Transport and framing"): every Envelope is
-preceded by its serialized size as a 4-byte little-endian unsigned integer.
+This is the low-level TCP client that returns protobuf messages;
+sim4cv.connect("tcp://...") wraps it in the common API of every transport
+(sim4cv.TcpClient, returning sim4cv.Frame objects).
+Wire format (docs/protocol.md, "Transport and framing"): framing.py.
 """
 
 import collections
 import socket
-import struct
 import time
 
-import numpy as np
-
 from ._proto import pb
+from .errors import ConnectionClosed, ProtocolError, ServerError  # noqa: F401 (re-exported)
+from .framing import (  # noqa: F401 (re-exported for existing users of sim4cv.client)
+    DEFAULT_MAX_MESSAGE_BYTES, LENGTH_PREFIX_BYTES, PROTOCOL_VERSION, FramedSocket, decode_envelope,
+    decode_length_prefix, encode_envelope, encode_length_prefix)
+from .images import (  # noqa: F401 (re-exported)
+    channel_value, delivery_value, entity_kind_value, find_image, image_array)
 from .world import WorldRequests
-
-PROTOCOL_VERSION = 1
-LENGTH_PREFIX_BYTES = 4
-DEFAULT_MAX_MESSAGE_BYTES = 64 << 20  # what we accept from the daemon: frames can be tens of MB
-
-_PREFIX = struct.Struct("<I")
 
 # Message kinds the server sends (Envelope oneof names).
 _SERVER_KINDS = ("welcome", "subscribed", "frame", "state", "error", "stats", "configured")
-
-
-class ServerError(Exception):
-    """The daemon answered with an Error envelope.
-
-    code       -- ErrorCode value (compare with sim4cv.pb.ERROR_CODE_*)
-    message    -- the server's human-readable explanation
-    fatal      -- True if the server has closed the connection after sending it
-    request_id -- the Configure.request_id it answers; 0 for Errors about other messages
-    """
-
-    def __init__(self, code, message, fatal, request_id=0):
-        self.code = int(code)
-        self.message = message
-        self.fatal = bool(fatal)
-        self.request_id = int(request_id)
-        super().__init__("%s%s: %s" % (self.code_name, " (fatal)" if self.fatal else "", message))
-
-    @property
-    def code_name(self):
-        try:
-            return pb.ErrorCode.Name(self.code)
-        except ValueError:
-            return "ERROR_CODE_%d" % self.code
-
-
-class ConnectionClosed(ConnectionError):
-    """The connection is closed (by the peer, by a fatal error, or by close())."""
-
-
-class ProtocolError(ConnectionError):
-    """The peer broke the framing (oversized prefix, unparsable bytes, or an
-    envelope of a kind the server never sends). The connection is closed."""
-
-
-# --------------------------------------------------------------------------
-# Framing: pure functions plus a buffered reader over a socket.
-# --------------------------------------------------------------------------
-
-def encode_length_prefix(size):
-    """The 4-byte little-endian prefix for a message of `size` bytes."""
-    return _PREFIX.pack(size)
-
-
-def decode_length_prefix(data):
-    """The size encoded in the first 4 bytes of `data` (any bytes-like object)."""
-    return _PREFIX.unpack_from(data)[0]
-
-
-def encode_envelope(envelope):
-    """Prefix + serialized bytes of `envelope`, ready to write to the stream."""
-    payload = envelope.SerializeToString()
-    return _PREFIX.pack(len(payload)) + payload
-
-
-def decode_envelope(payload):
-    """Parses an Envelope from a bytes-like object (bytes, bytearray, memoryview).
-    Raises ProtocolError if the bytes are not a valid Envelope."""
-    envelope = pb.Envelope()
-    try:
-        envelope.ParseFromString(payload)
-    except Exception as e:  # google.protobuf.message.DecodeError and friends
-        raise ProtocolError("received bytes that are not a valid Envelope: %s" % e) from e
-    return envelope
-
-
-class FramedSocket:
-    """Length-prefixed Envelopes over a connected stream socket.
-
-    Received bytes go into one preallocated bytearray with recv_into; an
-    Envelope is parsed straight from a memoryview slice of it, so bytes are
-    never copied between socket and parser. Small messages that arrive
-    together are parsed from a single recv. A timeout in the middle of a
-    message loses nothing: the partial bytes stay buffered for the next call.
-    """
-
-    def __init__(self, sock, max_message_bytes=DEFAULT_MAX_MESSAGE_BYTES, initial_buffer=1 << 20,
-                 send_timeout=None):
-        self.sock = sock
-        self.send_timeout = send_timeout  # None: block until the kernel takes the bytes
-        self.max_message_bytes = max_message_bytes
-        self._buf = bytearray(max(initial_buffer, 64))
-        self._view = memoryview(self._buf)
-        self._start = 0  # first unconsumed byte
-        self._end = 0    # one past the last received byte
-
-    def send(self, envelope):
-        self.send_raw(encode_envelope(envelope))
-
-    def send_raw(self, data):
-        # Receives leave a short per-call timeout on the socket; sends get their own.
-        self.sock.settimeout(self.send_timeout)
-        self.sock.sendall(data)
-
-    def _fill(self, needed, deadline):
-        """Ensures at least `needed` unconsumed bytes are buffered."""
-        if len(self._buf) - self._start < needed:
-            # Not enough room after _start: move the unconsumed bytes to the
-            # front, growing the buffer if even that is too small.
-            pending = self._end - self._start
-            if len(self._buf) < needed:
-                size = len(self._buf)
-                while size < needed:
-                    size *= 2
-                new = bytearray(size)
-                new[:pending] = self._view[self._start:self._end]
-                self._view.release()
-                self._buf = new
-                self._view = memoryview(self._buf)
-            else:
-                self._view[:pending] = self._view[self._start:self._end]
-            self._start, self._end = 0, pending
-        while self._end - self._start < needed:
-            if deadline is None:
-                self.sock.settimeout(None)
-            else:
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    raise TimeoutError("timed out waiting for the server")
-                self.sock.settimeout(remaining)
-            try:
-                n = self.sock.recv_into(self._view[self._end:])
-            except socket.timeout as e:  # an alias of TimeoutError on 3.10+
-                raise TimeoutError("timed out waiting for the server") from e
-            except ConnectionResetError as e:
-                raise ConnectionClosed("the server reset the connection") from e
-            if n == 0:
-                raise ConnectionClosed("the server closed the connection")
-            self._end += n
-
-    def receive(self, timeout=None):
-        """The next Envelope. Raises TimeoutError (nothing consumed),
-        ConnectionClosed, or ProtocolError."""
-        deadline = None if timeout is None else time.monotonic() + timeout
-        self._fill(LENGTH_PREFIX_BYTES, deadline)
-        size = _PREFIX.unpack_from(self._buf, self._start)[0]
-        if size > self.max_message_bytes:
-            raise ProtocolError("server announced a %d-byte message, above the limit of %d bytes"
-                                % (size, self.max_message_bytes))
-        self._fill(LENGTH_PREFIX_BYTES + size, deadline)
-        begin = self._start + LENGTH_PREFIX_BYTES
-        payload = self._view[begin:begin + size]
-        try:
-            envelope = decode_envelope(payload)
-        finally:
-            payload.release()
-        self._start = begin + size
-        if self._start == self._end:
-            self._start = self._end = 0
-        return envelope
-
-
-# --------------------------------------------------------------------------
-# Enum helpers: accept enum values or short names ("rgb", "lockstep").
-# --------------------------------------------------------------------------
-
-def _enum_value(enum, prefix, value):
-    if isinstance(value, str):
-        name = value.upper()
-        if not name.startswith(prefix):
-            name = prefix + name
-        try:
-            return enum.Value(name)
-        except ValueError:
-            raise ValueError("unknown %s %r; expected one of %s" % (
-                prefix.rstrip("_").lower(), value,
-                ", ".join(n[len(prefix):].lower() for n in enum.keys() if not n.endswith("UNSPECIFIED")))) from None
-    return int(value)
-
-
-def channel_value(channel):
-    """CHANNEL_* value for an int or a name such as "rgb", "DEPTH", "CHANNEL_MASK"."""
-    return _enum_value(pb.Channel, "CHANNEL_", channel)
-
-
-def delivery_value(delivery):
-    """DELIVERY_* value for an int or a name such as "lockstep", "newest" or "on_request"."""
-    return _enum_value(pb.Delivery, "DELIVERY_", delivery)
-
-
-def entity_kind_value(kind):
-    """ENTITY_KIND_* value for an int or a name such as "car" or "uav"."""
-    return _enum_value(pb.EntityKind, "ENTITY_KIND_", kind)
-
-
-# --------------------------------------------------------------------------
-# Images
-# --------------------------------------------------------------------------
-
-# Image.element -> numpy dtype. Each Image says its element type and
-# components, so any channel, including ones added after this client, can be
-# viewed without a table of channels or formats.
-_ELEMENTS = {
-    pb.ELEMENT_TYPE_U8: np.dtype(np.uint8),
-    pb.ELEMENT_TYPE_U16: np.dtype("<u2"),
-    pb.ELEMENT_TYPE_F32: np.dtype("<f4"),
-}
-
-
-def find_image(frame, channel):
-    """The Image of `channel` in `frame`, or None if the frame does not carry it."""
-    channel = channel_value(channel)
-    for image in frame.images:
-        if image.channel == channel:
-            return image
-    return None
-
-
-def image_array(frame, channel):
-    """A numpy view of one channel's pixels, shaped by Image.element and
-    Image.components: RGB -> (h, w, 3) uint8, DEPTH -> (h, w) float32 metres,
-    MASK -> (h, w) uint16, SEMANTIC -> (h, w) uint8 class ids, NORMALS ->
-    (h, w, 3) float32, FLOW -> (h, w, 2) float32 pixels (docs/protocol.md §8).
-
-    The array wraps the received bytes without copying (honouring the row
-    stride), so it is read-only; call .copy() to get a writable array.
-    Raises KeyError if the frame does not carry the channel.
-    """
-    image = find_image(frame, channel)
-    if image is None:
-        raise KeyError("frame %d does not carry channel %s" % (
-            frame.frame_id, pb.Channel.Name(channel_value(channel))))
-    try:
-        dtype = _ELEMENTS[image.element]
-    except KeyError:
-        raise ValueError("unsupported element type %d" % image.element) from None
-    components = image.components
-    if components < 1:
-        raise ValueError("image of channel %s has %d components" % (pb.Channel.Name(image.channel), components))
-    width, height, stride = frame.width, frame.height, image.stride
-    data = image.data  # one bytes object; the array below keeps it alive
-    row_bytes = width * components * dtype.itemsize
-    if stride < row_bytes or (height and len(data) < (height - 1) * stride + row_bytes):
-        raise ValueError("image of channel %s: %d bytes with stride %d do not hold %dx%d pixels" % (
-            pb.Channel.Name(image.channel), len(data), stride, width, height))
-    if components == 1:
-        shape, strides = (height, width), (stride, dtype.itemsize)
-    else:
-        shape, strides = (height, width, components), (stride, components * dtype.itemsize, dtype.itemsize)
-    return np.ndarray(shape, dtype=dtype, buffer=data, strides=strides)
 
 
 # --------------------------------------------------------------------------

@@ -30,6 +30,7 @@ enum class UdpCounter : std::size_t {
   kSendFailed,
   kFramesSent,
   kChunksSent,
+  kConfigureRepeated,
   kCount,
 };
 
@@ -45,7 +46,7 @@ class UdpCounters {
         "udp.out_of_order",       "udp.registrations",       "udp.expired",
         "udp.closed_by_error",    "udp.too_many_clients",    "udp.errors_sent",
         "udp.replies_rate_limited", "udp.send_failed",       "udp.frames_sent",
-        "udp.chunks_sent"};
+        "udp.chunks_sent",        "udp.configure_repeated"};
     for (std::size_t i = 0; i < kCount; ++i) {
       if (pending_[i] == 0) continue;
       shared.Add(kNames[i], pending_[i]);

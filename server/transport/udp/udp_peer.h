@@ -14,6 +14,7 @@
 
 #include "server/session/client_session.h"
 #include "server/transport/frame_encoding.h"
+#include "server/transport/udp/configure_history.h"
 #include "server/transport/udp/frame_chunker.h"
 #include "server/transport/udp/rate_limiter.h"
 #include "server/transport/udp/sequence_filter.h"
@@ -59,6 +60,7 @@ class UdpPeer {
   session::ClientProtocol& protocol() { return session_->protocol(); }
   SequenceFilter& sequence() { return sequence_; }
   RateLimiter& error_limit() { return error_limit_; }
+  ConfigureHistory& configures() { return configures_; }
 
   // Replies that met a full send buffer, encoded, oldest first: they go
   // before anything else to this peer (a later frame must not overtake
@@ -98,6 +100,7 @@ class UdpPeer {
 
   SequenceFilter sequence_;
   RateLimiter error_limit_;
+  ConfigureHistory configures_;
   Clock::time_point last_heard_;
 
   FrameEncoder encoder_;

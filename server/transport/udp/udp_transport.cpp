@@ -211,10 +211,28 @@ class UdpTransport : public Transport {
         }
         break;
       case Kind::kGetStats: counters_.Flush(context_->counters); break;
+      case Kind::kConfigure:
+        if (RepeatedConfigure(peer, now)) return;
+        break;
       default: break;
     }
     if (peer.protocol().Handle(request_, reply_) == Outcome::kNoReply) return;
     if (!Answer(peer, now)) Remove(peer.address());
+  }
+
+  // A retried Configure (its request_id seen lately) is not carried out
+  // again: its remembered answer goes out again, within the peer's reply
+  // rate limit, or nothing while the sim thread has not answered yet.
+  bool RepeatedConfigure(UdpPeer& peer, Clock::time_point now) {
+    const std::string* answer = nullptr;
+    const auto seen = peer.configures().Check(request_.configure().request_id(), &answer);
+    if (seen == ConfigureHistory::Seen::kNew) return false;
+    counters_.Add(UdpCounter::kConfigureRepeated);
+    if (seen == ConfigureHistory::Seen::kAnswered && Limit(peer, now)) {
+      reply_bytes_ = *answer;
+      SendEncodedTo(peer);
+    }
+    return true;
   }
 
   // What the sim thread offered each peer (ClientLink::OfferReply), each
@@ -244,6 +262,7 @@ class UdpTransport : public Transport {
   // Sends reply_ to a registered peer, an Error within the peer's rate limit.
   // False if it was a fatal Error: the caller unregisters the peer.
   bool Answer(UdpPeer& peer, Clock::time_point now) {
+    peer.configures().Answered(reply_);
     if (reply_.has_error()) {
       SendError(peer, now);
     } else {
@@ -293,6 +312,11 @@ class UdpTransport : public Transport {
   void SendReplyTo(UdpPeer& peer) {
     reply_bytes_.clear();
     reply_.AppendToString(&reply_bytes_);
+    SendEncodedTo(peer);
+  }
+
+  // reply_bytes_ to a registered peer (SendReplyTo).
+  void SendEncodedTo(UdpPeer& peer) {
     if (peer.unsent_replies().empty() && SendDatagram(peer.address(), reply_bytes_) >= 0) return;
     if (!peer.unsent_replies().empty() || FullBuffer()) {
       if (peer.unsent_bytes() + reply_bytes_.size() > limits::kMaxOfferedReplyBytes) {

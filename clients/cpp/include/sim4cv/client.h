@@ -1,8 +1,10 @@
-// libsim4cv-client: a small blocking TCP client for sim4cvd. It depends only
-// on the protocol (protocol/), never on server code.
+// libsim4cv-client: one blocking client for sim4cvd over any of its
+// transports, chosen by an address: tcp://HOST:PORT, udp://HOST:PORT or
+// shm://NAME (docs/clients.md). It depends only on the protocol
+// (protocol/), never on server code.
 //
 //   sim4cv::Client client;
-//   client.Connect("127.0.0.1", port);
+//   client.Connect("shm:///sim4cv");   // or "tcp://127.0.0.1:5000", "udp://127.0.0.1:5001"
 //   client.Subscribe("uav", {CHANNEL_RGB, CHANNEL_BOXES}, sim4cv::proto::DELIVERY_LOCKSTEP);
 //   for (...) { const auto& frame = client.StepAndReceive(); ... }
 //
@@ -16,6 +18,8 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -25,6 +29,12 @@
 #include "sim4cv.pb.h"
 
 namespace sim4cv {
+
+class UdpClient;
+class ShmClient;
+namespace detail {
+class Link;
+}
 
 // The daemon refused something: carries its code and message.
 class ServerError : public std::runtime_error {
@@ -84,47 +94,69 @@ class Client {
  public:
   using Duration = std::chrono::milliseconds;
 
-  Client() = default;
+  Client();
   ~Client();
   Client(const Client&) = delete;
   Client& operator=(const Client&) = delete;
 
-  // Connects, sends Hello and waits for Welcome. Throws ServerError if the
-  // daemon refuses (e.g. version mismatch), ConnectionError on I/O failure.
+  // Connects to the daemon at `address` (tcp://HOST:PORT, udp://HOST:PORT
+  // or shm://NAME, NAME as given to --shm-name), sends Hello and waits for
+  // Welcome, all within `timeout`. Throws std::invalid_argument for an
+  // address of another form, ServerError if the daemon refuses (e.g.
+  // VERSION_MISMATCH), ConnectionError (ShmError for shared memory) naming
+  // the address if nothing answers there.
+  void Connect(const std::string& address, const std::string& client_name = "cpp-client",
+               Duration timeout = Duration(5000), uint32_t protocol_version = 0 /* 0: this build's */);
+  // The same as Connect("tcp://HOST:PORT", ...).
   void Connect(const std::string& host, uint16_t port, const std::string& client_name = "cpp-client",
                Duration timeout = Duration(5000), uint32_t protocol_version = 0 /* 0: this build's */);
-  // Connects without the handshake (for tests that misbehave on purpose).
+  // Connects over TCP without the handshake (for tests that misbehave on purpose).
   void ConnectRaw(const std::string& host, uint16_t port, Duration timeout = Duration(5000));
-  bool connected() const { return fd_ >= 0; }
+  bool connected() const;
+  // The address connected to ("" before the first Connect).
+  const std::string& address() const { return address_; }
   const proto::Welcome& welcome() const { return welcome_; }
+
+  // The transport's own client, for its optional knobs (UDP retry interval
+  // and counters; shared memory: zero-copy FrameViews of the ring), or
+  // nullptr when connected over another transport.
+  UdpClient* udp();
+  ShmClient* shm();
 
   // Subscribes and waits for Subscribed. Throws ServerError on refusal,
   // ConnectionError on timeout. Frames of a previous subscription still
-  // queued when Subscribed arrives are dropped.
+  // queued when Subscribed arrives are dropped. Over shared memory the
+  // camera must be the ring's and the channels ones it carries.
   void Subscribe(const std::string& camera, const std::vector<proto::Channel>& channels, proto::Delivery delivery,
                  bool with_state = false, Duration timeout = Duration(5000));
 
-  // Lockstep: asks for the next frame.
+  // Lockstep: asks for the next frame (over UDP not retried: if the frame is
+  // lost, ReceiveFrame times out and the caller Steps again).
   void Step();
   // Waits for the next Frame. Returns false on timeout. Throws ServerError if
   // an Error arrives (or was queued by Configure) first. The frame stays
-  // valid until the next receive.
+  // valid until the next receive. Over shared memory: the newest frame of
+  // the ring not received yet, copied once into `frame`.
   bool ReceiveFrame(proto::Frame& frame, Duration timeout = Duration(10000));
   // Step() then ReceiveFrame(); throws ConnectionError on timeout.
   const proto::Frame& StepAndReceive(Duration timeout = Duration(10000));
-  // On-request delivery (DELIVERY_ON_REQUEST): asks for a frame (NextFrame)
-  // and waits for it: the newest this client was not sent yet, else the next
-  // one rendered; at most one frame period plus its transfer old. Throws
-  // ConnectionError on timeout.
+  // Newest frame on request (subscribe with DELIVERY_ON_REQUEST; over shared
+  // memory any delivery): the newest frame this client was not given yet,
+  // else the next one rendered; at most one frame period plus its transfer
+  // old. Frames queued before are dropped as stale. Throws ConnectionError
+  // on timeout.
   const proto::Frame& RequestFrame(Duration timeout = Duration(10000));
 
   void SendTrackerOutput(uint64_t frame_id, float x, float y, float width, float height, float confidence);
   void SendControls(uint32_t entity_id, float steering, float throttle, float brake);
   // Sends GetState and waits for State. Frames arriving meanwhile are kept
-  // for the next ReceiveFrame. A State already queued (the answer to a
-  // GetState sent through SendEnvelope) is returned without a new request.
-  // Throws ConnectionError on timeout.
+  // for the next ReceiveFrame. Over TCP and shared memory a State already
+  // queued (the answer to a GetState sent through SendEnvelope) is returned
+  // without a new request; over UDP it is stale and dropped. Throws
+  // ConnectionError on timeout.
   proto::State GetState(Duration timeout = Duration(5000));
+  // The daemon's counters (docs/protocol.md, "Counters").
+  proto::Stats GetStats(Duration timeout = Duration(5000));
 
   // Configuring the world (docs/protocol.md, "Configuring the world"): sends
   // `request` with the next request_id (overwriting the one given) and waits
@@ -133,6 +165,9 @@ class Client {
   // meanwhile are queued: Frames for ReceiveFrame, and Errors that are not
   // this request's answer (e.g. UNKNOWN_CAMERA for a subscription whose
   // camera was just removed) for the next call that waits, which throws them.
+  // Over UDP the request is retried with its request_id, which the daemon
+  // carries out once; over shared memory it goes through a TCP connection
+  // of its own to the same daemon (the rings' messages are too small).
   proto::Configured Configure(proto::Configure request, Duration timeout = Duration(30000));
   // Convenience wrappers: one request each, answered with the world after
   // the change. Same exceptions as Configure.
@@ -185,7 +220,7 @@ class Client {
   proto::RoadQueryResult QueryRoad(double x, double y, uint32_t count = 0, double step = 0,
                                    std::optional<double> heading_deg = std::nullopt);
 
-  // Low level: one envelope out, with its length prefix.
+  // Low level: one envelope out (TCP: with its length prefix).
   void SendEnvelope(const proto::Envelope& envelope);
   // Low level: raw bytes exactly as given (tests use it to send garbage).
   void SendRaw(const void* data, std::size_t size);
@@ -193,9 +228,10 @@ class Client {
   // An Error is returned like any other envelope, not thrown.
   bool ReceiveEnvelope(proto::Envelope& envelope, Duration timeout);
 
-  // Envelopes the server announces as larger than this are refused with a
-  // ConnectionError (default: wire::kDefaultMaxMessageBytes, 64 MiB: frames can be tens of MB).
-  void set_max_message_bytes(uint32_t bytes) { max_message_bytes_ = bytes; }
+  // TCP: envelopes the server announces as larger than this are refused with
+  // a ConnectionError (default: wire::kDefaultMaxMessageBytes, 64 MiB:
+  // frames can be tens of MB).
+  void set_max_message_bytes(uint32_t bytes);
   uint32_t max_message_bytes() const { return max_message_bytes_; }
 
   // Idempotent. Drops queued envelopes and any partly read one.
@@ -204,40 +240,36 @@ class Client {
  private:
   using Deadline = std::chrono::steady_clock::time_point;
 
+  // What a wait stops at: the envelope it wants, and whether other Errors
+  // interrupt it (fatal ones always do) or queue for the next wait.
+  struct Awaited {
+    std::function<bool(const proto::Envelope&)> wanted;
+    bool errors_interrupt = true;
+    bool frame = false;  // a frame is wanted (shared memory reads the ring only then)
+  };
+  // Sends `request` over `link` (again every retry interval of a lossy
+  // link) until what `awaited` wants arrives; see ReceiveMatching.
+  bool Request(detail::Link& link, const proto::Envelope& request, const Awaited& awaited, proto::Envelope& out,
+               Deadline deadline);
   // Reads until an envelope of `kind` arrives; others queue. An Error (one
   // queued before the envelope wanted, or read while waiting) is thrown.
   bool ReceiveKind(proto::Envelope::KindCase kind, proto::Envelope& out, Deadline deadline);
-  // Reads until an envelope `wanted` accepts arrives (queued ones first);
-  // others queue, Errors too unless `errors_interrupt` (fatal ones are
-  // always thrown). Defined in client.cpp, the only user.
-  template <typename Wanted>
-  bool ReceiveMatching(const Wanted& wanted, bool errors_interrupt, proto::Envelope& out, Deadline deadline);
+  // Reads from `link` until what `awaited` wants arrives (queued ones
+  // first); others queue.
+  bool ReceiveMatching(detail::Link& link, const Awaited& awaited, proto::Envelope& out, Deadline deadline);
   // Configure, answered with the world after the change.
   proto::WorldInfo ConfigureWorld(proto::Configure request);
-  // Reads the next envelope off the socket into scratch_. False on timeout; a
-  // message cut by a timeout is resumed by the next call.
-  bool ReadEnvelope(Deadline deadline);
-  void ParseScratch(std::size_t size);
   [[noreturn]] void ThrowServerError(const proto::Error& error);  // closes first if fatal
-  [[noreturn]] void FailConnection(const std::string& what);      // closes, names the peer
-  void RequireConnected() const;
+  detail::Link& link() const;                                     // throws ConnectionError unless connected
 
-  int fd_ = -1;
-  std::string peer_;  // "host:port", for error messages
+  std::unique_ptr<detail::Link> link_;
+  std::string address_;
   uint32_t max_message_bytes_ = wire::kDefaultMaxMessageBytes;
   proto::Welcome welcome_;
   uint32_t last_request_id_ = 0;
   proto::Envelope scratch_;
   proto::Frame frame_;
   std::deque<proto::Envelope> pending_;
-  std::string buffer_;       // body of the envelope being read; only grows
-  std::string send_buffer_;  // prefix + body of the envelope being sent
-
-  // Progress of the envelope being read, kept across timeouts.
-  uint8_t prefix_[wire::kLengthPrefixBytes] = {};
-  std::size_t prefix_filled_ = 0;
-  std::size_t body_size_ = 0;
-  std::size_t body_filled_ = 0;
 };
 
 }  // namespace sim4cv
