@@ -24,3 +24,4 @@ sim4cv_test(integration hardening_sim_thread_test sim4cv_client sim4cv_runlog)
 sim4cv_test(integration hardening_world_test sim4cv_client sim4cv_runlog)
 sim4cv_test(integration configure_conditions_test sim4cv_client)
 sim4cv_test(integration configure_effects_test sim4cv_client sim4cv_common)  # effects_wire.h: the table as a proto
+sim4cv_test(integration client_transports_test sim4cv_client)

@@ -7,6 +7,7 @@ once per test. Each test ends by sending SIGTERM and asserting exit status 0.
 If the binary is missing the tests fail (they do not skip).
 """
 
+import itertools
 import os
 import queue
 import re
@@ -24,6 +25,12 @@ sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 import sim4cv  # noqa: E402
 
 LISTENING = re.compile(r"^sim4cvd listening tcp=(\d+)(\s|$)")
+_SHM_NAMES = itertools.count(1)
+
+
+def unique_shm_name():
+    """A --shm-name no other test (or test run) uses: /sim4cv-pytest-<pid>-<n>."""
+    return "/sim4cv-pytest-%d-%d" % (os.getpid(), next(_SHM_NAMES))
 STARTUP_TIMEOUT_S = 60.0
 EXIT_TIMEOUT_S = 20.0
 
@@ -53,6 +60,25 @@ class Daemon:
         self._reader = threading.Thread(target=self._drain_stdout, daemon=True)
         self._reader.start()
         self.port = self._wait_listening()
+
+    # The listening line's fields: tcp=PORT [udp=PORT] [shm=NAME] (docs/protocol.md 1).
+    @property
+    def fields(self):
+        return dict(item.split("=", 1) for item in self.stdout_lines[0].split()[2:] if "=" in item)
+
+    @property
+    def udp_port(self):
+        return int(self.fields["udp"]) if "udp" in self.fields else None
+
+    @property
+    def shm_name(self):
+        return self.fields.get("shm")
+
+    def address(self, transport):
+        """"tcp://127.0.0.1:PORT", "udp://127.0.0.1:PORT" or "shm://NAME" of this daemon."""
+        if transport == "shm":
+            return "shm://" + self.shm_name
+        return "%s://127.0.0.1:%d" % (transport, self.port if transport == "tcp" else self.udp_port)
 
     def _drain_stdout(self):
         # Keep reading so the daemon never blocks on a full pipe.
@@ -132,6 +158,17 @@ def start_daemon(tmp_path):
             failures.append("sim4cvd exit status after SIGTERM: %r (expected 0)\n%s" % (rc, d.log()))
     if failures:
         pytest.fail("\n\n".join(failures), pytrace=False)
+
+
+@pytest.fixture
+def start_transports_daemon(start_daemon):
+    """Factory: a daemon serving TCP, UDP and a fresh shared-memory ring
+    (extra flags appended, so they may override these)."""
+
+    def start(*extra):
+        return start_daemon("--udp-port", "0", "--shm-name", unique_shm_name(), *extra)
+
+    return start
 
 
 @pytest.fixture

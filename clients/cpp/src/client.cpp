@@ -191,8 +191,8 @@ proto::Configured Client::Configure(proto::Configure request, Duration timeout) 
   };
   Envelope reply;
   if (!Request(link().configure_link(), envelope, {answer, /*errors_interrupt=*/false}, reply, deadline)) {
-    throw ConnectionError("timed out after " + std::to_string(timeout.count()) +
-                          " ms waiting for Configured from " + address_);
+    throw ConnectionError("timed out after " + std::to_string(timeout.count()) + " ms waiting for Configured from " +
+                          address_);
   }
   if (reply.has_error()) ThrowServerError(reply.error());
   return std::move(*reply.mutable_configured());
@@ -235,7 +235,9 @@ bool Client::Request(detail::Link& link, const Envelope& request, const Awaited&
 bool Client::ReceiveMatching(detail::Link& link, const Awaited& awaited, Envelope& out, Deadline deadline) {
   // Only Configure queues Errors (those that are not its answer); whoever
   // waits next meets them in arrival order.
-  const auto stops = [&](const Envelope& e) { return awaited.wanted(e) || (awaited.errors_interrupt && e.has_error()); };
+  const auto stops = [&](const Envelope& e) {
+    return awaited.wanted(e) || (awaited.errors_interrupt && e.has_error());
+  };
   if (detail::TakeQueuedIf(pending_, stops, out)) {
     if (!awaited.wanted(out)) ThrowServerError(out.error());
     return true;

@@ -222,7 +222,8 @@ proto::Configure QueryRoadRequest(double x, double y, uint32_t count, double ste
 }
 
 bool TakeQueued(std::deque<proto::Envelope>& pending, proto::Envelope::KindCase kind, proto::Envelope& out) {
-  return TakeQueuedIf(pending, [kind](const proto::Envelope& e) { return e.kind_case() == kind; }, out);
+  return TakeQueuedIf(
+      pending, [kind](const proto::Envelope& e) { return e.kind_case() == kind; }, out);
 }
 
 }  // namespace sim4cv::detail

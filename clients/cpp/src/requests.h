@@ -45,7 +45,8 @@ proto::Configure AddCameraRequest(const CameraSetup& camera);
 proto::Configure RemoveCameraRequest(const std::string& name);
 proto::Configure ResetRequest();
 proto::Configure GetWorldRequest();
-proto::Configure SetConditionsRequest(const std::string& preset, std::optional<double> hour, const std::string& quality);
+proto::Configure SetConditionsRequest(const std::string& preset, std::optional<double> hour,
+                                      const std::string& quality);
 proto::Configure QueryRoadRequest(double x, double y, uint32_t count, double step, std::optional<double> heading_deg);
 
 // Moves the oldest queued envelope that `wanted` accepts into `out`. Clients

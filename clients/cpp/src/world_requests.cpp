@@ -51,7 +51,9 @@ proto::WorldInfo Client::UavVelocity(uint32_t uav_id, double vx, double vy, doub
   return ConfigureWorld(detail::UavVelocityRequest(uav_id, vx, vy, vz, yaw_rate_deg));
 }
 
-proto::WorldInfo Client::AddCamera(const CameraSetup& camera) { return ConfigureWorld(detail::AddCameraRequest(camera)); }
+proto::WorldInfo Client::AddCamera(const CameraSetup& camera) {
+  return ConfigureWorld(detail::AddCameraRequest(camera));
+}
 
 proto::WorldInfo Client::RemoveCamera(const std::string& name) {
   return ConfigureWorld(detail::RemoveCameraRequest(name));

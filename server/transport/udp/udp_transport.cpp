@@ -14,8 +14,8 @@
 
 #include "protocol/framing.h"
 #include "server/common/check.h"
-#include "server/common/limits.h"
 #include "server/common/diagnostics.h"
+#include "server/common/limits.h"
 #include "server/transport/udp/udp_counters.h"
 #include "server/transport/udp/udp_peer.h"
 
@@ -134,10 +134,9 @@ class UdpTransport : public Transport {
     if (!request_.ParseFromArray(data, static_cast<int>(size))) {
       counters_.Add(UdpCounter::kMalformed);
       if (peer) {
-        session::ClientProtocol::Refuse(proto::ERROR_CODE_MALFORMED_MESSAGE,
-                                        "the " + std::to_string(size) +
-                                            "-byte datagram is not a valid Envelope; it was dropped",
-                                        false, reply_);
+        session::ClientProtocol::Refuse(
+            proto::ERROR_CODE_MALFORMED_MESSAGE,
+            "the " + std::to_string(size) + "-byte datagram is not a valid Envelope; it was dropped", false, reply_);
         SendError(*peer, now);
       }
       return;
@@ -158,11 +157,11 @@ class UdpTransport : public Transport {
     if (!request_.has_hello()) {
       counters_.Add(UdpCounter::kUnregisteredSender);
       if (request_.kind_case() == Kind::KIND_NOT_SET) return;  // a keep-alive that came too late: no answer
-      session::ClientProtocol::Refuse(
-          proto::ERROR_CODE_NOT_HANDSHAKEN,
-          "UDP address " + from.ToString() + " is not registered (no Hello yet, or its registration lapsed after " +
-              std::to_string(options_.expiry_ms) + " ms of silence); send Hello first",
-          true, reply_);
+      session::ClientProtocol::Refuse(proto::ERROR_CODE_NOT_HANDSHAKEN,
+                                      "UDP address " + from.ToString() +
+                                          " is not registered (no Hello yet, or its registration lapsed after " +
+                                          std::to_string(options_.expiry_ms) + " ms of silence); send Hello first",
+                                      true, reply_);
       ReplyToStranger(from, now);
       return;
     }
@@ -175,8 +174,8 @@ class UdpTransport : public Transport {
       ReplyToStranger(from, now);
       return;
     }
-    auto peer = std::make_shared<UdpPeer>(session::NewClientId(), from, *context_, wakeup_,
-                                          options_.max_datagram_bytes, now);
+    auto peer =
+        std::make_shared<UdpPeer>(session::NewClientId(), from, *context_, wakeup_, options_.max_datagram_bytes, now);
     peer->Start();
     peer->protocol().Handle(request_, reply_);
     if (!reply_.has_welcome()) {
@@ -192,7 +191,8 @@ class UdpTransport : public Transport {
 
   void Dispatch(UdpPeer& peer, Clock::time_point now) {
     switch (request_.kind_case()) {
-      case Kind::KIND_NOT_SET: return;  // keep-alive
+      case Kind::KIND_NOT_SET:
+        return;  // keep-alive
       case Kind::kHello:
         if (request_.hello().protocol_version() == wire::kProtocolVersion) {
           // A repeated Hello: its Welcome may have been lost. Same answer, nothing else changes.
@@ -210,11 +210,14 @@ class UdpTransport : public Transport {
           return;
         }
         break;
-      case Kind::kGetStats: counters_.Flush(context_->counters); break;
+      case Kind::kGetStats:
+        counters_.Flush(context_->counters);
+        break;
       case Kind::kConfigure:
         if (RepeatedConfigure(peer, now)) return;
         break;
-      default: break;
+      default:
+        break;
     }
     if (peer.protocol().Handle(request_, reply_) == Outcome::kNoReply) return;
     if (!Answer(peer, now)) Remove(peer.address());
@@ -412,8 +415,7 @@ class UdpTransport : public Transport {
       }
       counters_.Add(UdpCounter::kExpired);
       LOG_INFO("client " << peer.client() << " ('" << peer.protocol().client_name() << "') over UDP from "
-                         << peer.address().ToString() << " expired after " << options_.expiry_ms
-                         << " ms of silence");
+                         << peer.address().ToString() << " expired after " << options_.expiry_ms << " ms of silence");
       peer.Close(true);
       it = peers_.erase(it);
     }
@@ -430,12 +432,13 @@ class UdpTransport : public Transport {
   // One log line per interval in which datagrams were dropped.
   void LogDrops() {
     std::string line;
-    for (const auto& [counter, name] :
-         {std::pair{UdpCounter::kMalformed, "malformed"}, {UdpCounter::kUnregisteredSender, "unregistered_sender"},
-          {UdpCounter::kClientFrameChunk, "client_frame_chunk"}, {UdpCounter::kOutOfOrder, "out_of_order"},
-          {UdpCounter::kDatagramsTruncated, "datagrams_truncated"},
-          {UdpCounter::kReceiveBufferOverflow, "receive_buffer_overflow"},
-          {UdpCounter::kRepliesRateLimited, "replies_rate_limited"}}) {
+    for (const auto& [counter, name] : {std::pair{UdpCounter::kMalformed, "malformed"},
+                                        {UdpCounter::kUnregisteredSender, "unregistered_sender"},
+                                        {UdpCounter::kClientFrameChunk, "client_frame_chunk"},
+                                        {UdpCounter::kOutOfOrder, "out_of_order"},
+                                        {UdpCounter::kDatagramsTruncated, "datagrams_truncated"},
+                                        {UdpCounter::kReceiveBufferOverflow, "receive_buffer_overflow"},
+                                        {UdpCounter::kRepliesRateLimited, "replies_rate_limited"}}) {
       const uint64_t total = counters_.total(counter);
       uint64_t& logged = logged_drops_[static_cast<std::size_t>(counter)];
       if (total == logged) continue;
@@ -471,6 +474,8 @@ class UdpTransport : public Transport {
 
 }  // namespace
 
-std::unique_ptr<Transport> MakeUdpTransport(const UdpOptions& options) { return std::make_unique<UdpTransport>(options); }
+std::unique_ptr<Transport> MakeUdpTransport(const UdpOptions& options) {
+  return std::make_unique<UdpTransport>(options);
+}
 
 }  // namespace sim4cv::transport

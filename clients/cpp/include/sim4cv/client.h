@@ -70,7 +70,8 @@ struct ImageView {
   // Pixel (x, y) as T (float for DEPTH/NORMALS/FLOW, uint16_t for MASK, uint8_t else).
   template <typename T>
   const T* at(uint32_t x, uint32_t y) const {
-    return reinterpret_cast<const T*>(data + static_cast<std::size_t>(y) * stride) + static_cast<std::size_t>(x) * components;
+    return reinterpret_cast<const T*>(data + static_cast<std::size_t>(y) * stride) +
+           static_cast<std::size_t>(x) * components;
   }
 };
 

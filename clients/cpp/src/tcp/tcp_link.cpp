@@ -112,8 +112,7 @@ class TcpLink : public Link {
     // allocated, so a frame like the caller's last one parses without
     // touching the heap. Only safe when the new envelope is a frame too,
     // which its first byte tells.
-    const bool reuse_frame =
-        out.has_frame() && body_size_ > 0 && static_cast<uint8_t>(buffer_[0]) == kFrameFieldTag;
+    const bool reuse_frame = out.has_frame() && body_size_ > 0 && static_cast<uint8_t>(buffer_[0]) == kFrameFieldTag;
     if (reuse_frame) {
       out.mutable_frame()->Clear();
     } else {
