@@ -165,6 +165,20 @@ TEST_F(DaemonTest, ARetriedConfigureOverUdpIsCarriedOutOnce) {
   EXPECT_EQ(client.GetStats().counters().at("udp.configure_repeated"), 3u);
 }
 
+// The tracker loop docs/clients.md shows (clients/cpp/examples/tracker_loop.cpp)
+// runs as written over every transport.
+TEST_P(ClientTransportsTest, TheDocumentedTrackerLoopRuns) {
+  Start({"--mode", "lockstep"});
+  const std::string command = std::string(SIM4CV_TRACKER_LOOP) + " " + Address() + " 30 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  char buffer[256];
+  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  EXPECT_EQ(pclose(pipe), 0) << output;
+  EXPECT_EQ(output, "tracked 30 frames over " + Address() + "\n");
+}
+
 INSTANTIATE_TEST_SUITE_P(Transports, ClientTransportsTest,
                          ::testing::Values(Transport::kTcp, Transport::kUdp, Transport::kShm),
                          [](const auto& info) { return Name(info.param); });

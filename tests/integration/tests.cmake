@@ -25,3 +25,5 @@ sim4cv_test(integration hardening_world_test sim4cv_client sim4cv_runlog)
 sim4cv_test(integration configure_conditions_test sim4cv_client)
 sim4cv_test(integration configure_effects_test sim4cv_client sim4cv_common)  # effects_wire.h: the table as a proto
 sim4cv_test(integration client_transports_test sim4cv_client)
+target_compile_definitions(client_transports_test PRIVATE SIM4CV_TRACKER_LOOP="$<TARGET_FILE:sim4cv_tracker_loop>")
+add_dependencies(client_transports_test sim4cv_tracker_loop)
