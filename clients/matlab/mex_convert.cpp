@@ -155,8 +155,8 @@ mxArray* FrameToStruct(const proto::Frame& frame) {
 }
 
 mxArray* StateToStruct(const proto::State& state) {
-  const char* fields[] = {"frame_id", "sim_time", "entities"};
-  mxArray* out = mxCreateStructMatrix(1, 1, 3, fields);
+  const char* fields[] = {"frame_id", "sim_time", "entities", "last_tracker_output"};
+  mxArray* out = mxCreateStructMatrix(1, 1, 4, fields);
   mxSetFieldByNumber(out, 0, 0, Scalar(static_cast<double>(state.frame_id())));
   mxSetFieldByNumber(out, 0, 1, Scalar(state.sim_time()));
   mxArray* entities =
@@ -175,6 +175,13 @@ mxArray* StateToStruct(const proto::State& state) {
                        Row({e.linear_velocity().x(), e.linear_velocity().y(), e.linear_velocity().z()}));
   }
   mxSetFieldByNumber(out, 0, 2, entities);
+  const proto::TrackerOutput& t = state.last_tracker_output();
+  const char* output_fields[] = {"frame_id", "box", "confidence"};
+  mxArray* output = mxCreateStructMatrix(1, 1, 3, output_fields);
+  mxSetFieldByNumber(output, 0, 0, Scalar(static_cast<double>(t.frame_id())));
+  mxSetFieldByNumber(output, 0, 1, Row({t.box().x(), t.box().y(), t.box().width(), t.box().height()}));
+  mxSetFieldByNumber(output, 0, 2, Scalar(t.confidence()));
+  mxSetFieldByNumber(out, 0, 3, output);
   return out;
 }
 

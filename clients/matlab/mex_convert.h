@@ -21,7 +21,8 @@ mxArray* FrameToStruct(const proto::Frame& frame);
 
 // A struct with frame_id, sim_time and entities (Nx1 struct array: id, name,
 // kind, position [x y z], yaw (degrees counter-clockwise from east),
-// orientation [w x y z], velocity [vx vy vz]).
+// orientation [w x y z], velocity [vx vy vz]) and last_tracker_output
+// (frame_id, box [x y w h], confidence).
 mxArray* StateToStruct(const proto::State& state);
 
 // A struct with scene_name, frame_id, entities (Nx1 struct: id, name, kind),

@@ -53,7 +53,7 @@ class Call {
       : command_(std::move(command)), usage_(usage), nrhs_(nrhs), prhs_(prhs), nlhs_(nlhs), plhs_(plhs) {}
 
   [[noreturn]] void Fail(const std::string& why) const {
-    throw BadArgument("sim4cv_mex('" + command_ + "'): " + why + "; usage: " + usage_);
+    throw BadArgument(command_ + ": " + why + "; usage: " + usage_);
   }
   void Count(int min, int max) const {
     if (nrhs_ < min || nrhs_ > max) {
@@ -65,7 +65,7 @@ class Call {
   bool Has(int i) const { return i < nrhs_; }
   double Number(int i, const char* what) const {
     const mxArray* a = prhs_[i];
-    if (!(mxIsDouble(a) || mxIsSingle(a) || mxIsInteger(a)) || mxIsComplex(a) || mxGetNumberOfElements(a) != 1) {
+    if (!(mxIsNumeric(a) || mxIsLogical(a)) || mxIsComplex(a) || mxGetNumberOfElements(a) != 1) {
       Fail(std::string(what) + " must be a real number");
     }
     const double v = mxGetScalar(a);
@@ -91,8 +91,8 @@ class Call {
     if (mxIsChar(a)) return {String(i, what)};
     if (!mxIsCell(a)) Fail(std::string(what) + " must be a cell array of strings");
     std::vector<std::string> out;
-    for (mwIndex k = 0; k < mxGetNumberOfElements(a); ++k) {
-      const mxArray* cell = mxGetCell(a, k);
+    for (std::size_t k = 0; k < mxGetNumberOfElements(a); ++k) {
+      const mxArray* cell = mxGetCell(a, static_cast<mwIndex>(k));
       if (!cell) Fail(std::string(what) + " must be a cell array of strings");
       out.push_back(StringOf(cell, what));
     }
@@ -104,7 +104,7 @@ class Call {
     const auto found = std::isfinite(v) && v == std::floor(v) ? Clients().find(static_cast<int>(v)) : Clients().end();
     if (found == Clients().end()) {
       const std::string which = std::isfinite(v) ? "handle " + std::to_string(static_cast<long long>(v)) : "the handle";
-      throw BadHandle("sim4cv_mex('" + command_ + "'): " + which +
+      throw BadHandle(command_ + ": " + which +
                       " is not an open sim4cv connection (closed, or never opened); use the number sim4cv_connect returned");
     }
     return *found->second;
@@ -289,7 +289,7 @@ std::string CommandList() {
 
 void Dispatch(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   if (nrhs < 1 || !mxIsChar(prhs[0])) {
-    throw BadArgument("sim4cv_mex: the first argument must be a command: " + CommandList());
+    throw BadArgument("the first argument must be a command: " + CommandList());
   }
   char* text = mxArrayToString(prhs[0]);
   const std::string name = text ? text : "";
@@ -301,7 +301,7 @@ void Dispatch(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
     command.run(call);
     return;
   }
-  throw BadArgument("sim4cv_mex: unknown command '" + name + "'; commands: " + CommandList());
+  throw BadArgument("unknown command '" + name + "'; commands: " + CommandList());
 }
 
 }  // namespace

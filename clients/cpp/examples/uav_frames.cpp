@@ -2,7 +2,8 @@
 // ground truth, reports per-frame latency (render end -> frame in hand) and
 // saves a few annotated PNGs.
 //
-//   sim4cv_uav_frames --port 40123 [--host 127.0.0.1] [--frames 100] [--out DIR] [--save 5]
+//   sim4cv_uav_frames --address shm:///sim4cv | udp://127.0.0.1:40124 [--frames 100] [--out DIR] [--save 5]
+//   sim4cv_uav_frames --port 40123 [--host 127.0.0.1] ...   (the same as --address tcp://HOST:PORT)
 #include <time.h>
 
 #include <algorithm>
@@ -27,6 +28,7 @@ namespace {
 using sim4cv::proto::Frame;
 
 struct Options {
+  std::string address;  // tcp://, udp:// or shm://; empty: tcp://host:port
   std::string host = "127.0.0.1";
   int port = 0;
   int frames = 100;
@@ -60,7 +62,9 @@ Options ParseArgs(int argc, char** argv) {
     if (flag == "--help" || flag == "-h") throw UsageError("");
     if (i + 1 >= argc) throw UsageError("missing value after " + flag);
     const std::string value = argv[++i];
-    if (flag == "--host") {
+    if (flag == "--address") {
+      options.address = value;
+    } else if (flag == "--host") {
       options.host = value;
     } else if (flag == "--port") {
       options.port = ParseInt(flag, value, 1, 65535);
@@ -74,7 +78,10 @@ Options ParseArgs(int argc, char** argv) {
       throw UsageError("unknown flag: " + flag);
     }
   }
-  if (options.port == 0) throw UsageError("--port is required");
+  if (options.address.empty()) {
+    if (options.port == 0) throw UsageError("--address or --port is required");
+    options.address = "tcp://" + options.host + ":" + std::to_string(options.port);
+  }
   return options;
 }
 
@@ -176,7 +183,7 @@ double Percentile(std::vector<double> sorted_copy, double fraction) {
 
 int Run(const Options& options) {
   sim4cv::Client client;
-  client.Connect(options.host, static_cast<uint16_t>(options.port), "sim4cv_uav_frames");
+  client.Connect(options.address, "sim4cv_uav_frames");
   PrintWelcome(client.welcome());
 
   // A realtime daemon refuses lockstep delivery and advances on its own.
@@ -223,7 +230,9 @@ int main(int argc, char** argv) {
     return Run(ParseArgs(argc, argv));
   } catch (const UsageError& e) {
     if (*e.what() != '\0') std::cerr << "sim4cv_uav_frames: " << e.what() << "\n";
-    std::cerr << "usage: sim4cv_uav_frames --port P [--host H] [--frames N] [--out DIR] [--save K]\n";
+    std::cerr
+        << "usage: sim4cv_uav_frames (--address tcp://H:P|udp://H:P|shm://NAME | --port P [--host H]) [--frames N] "
+           "[--out DIR] [--save K]\n";
     return 2;
   } catch (const sim4cv::ServerError& e) {
     std::cerr << "sim4cv_uav_frames: sim4cvd refused: " << sim4cv::proto::ErrorCode_Name(e.code()) << ": " << e.what()
