@@ -38,23 +38,32 @@ std::string LowerSuffix(const std::string& enum_name, const std::string& prefix)
 
 const char* ChannelField(proto::Channel channel) {
   switch (channel) {
-    case proto::CHANNEL_RGB: return "rgb";
-    case proto::CHANNEL_DEPTH: return "depth";
-    case proto::CHANNEL_MASK: return "mask";
-    case proto::CHANNEL_SEMANTIC: return "semantic";
-    case proto::CHANNEL_NORMALS: return "normals";
-    case proto::CHANNEL_FLOW: return "flow";
-    default: return nullptr;
+    case proto::CHANNEL_RGB:
+      return "rgb";
+    case proto::CHANNEL_DEPTH:
+      return "depth";
+    case proto::CHANNEL_MASK:
+      return "mask";
+    case proto::CHANNEL_SEMANTIC:
+      return "semantic";
+    case proto::CHANNEL_NORMALS:
+      return "normals";
+    case proto::CHANNEL_FLOW:
+      return "flow";
+    default:
+      return nullptr;
   }
 }
 
 // One pass over the pixels: C-order rows of `stride` bytes, pixel (c, r)
-// component k, into MATLAB's column-major element (r, c, k).
+// component k, into MATLAB's column-major element (r, c, k), written in
+// memory order (the reads stride down a column of the image, which stays in cache).
 template <typename T>
 mxArray* ImageArray(const proto::Image& image, uint32_t width, uint32_t height, mxClassID class_id) {
   const uint32_t components = std::max<uint32_t>(image.components(), 1);
   const std::size_t row_bytes = std::size_t(width) * components * sizeof(T);
-  if (image.stride() < row_bytes || image.data().size() < (height ? (height - 1) * std::size_t(image.stride()) + row_bytes : 0)) {
+  if (image.stride() < row_bytes ||
+      image.data().size() < (height ? (height - 1) * std::size_t(image.stride()) + row_bytes : 0)) {
     throw ConnectionError("frame image of channel " + proto::Channel_Name(image.channel()) + " holds " +
                           std::to_string(image.data().size()) + " bytes, too few for " + std::to_string(width) + "x" +
                           std::to_string(height) + "x" + std::to_string(components));
@@ -62,17 +71,15 @@ mxArray* ImageArray(const proto::Image& image, uint32_t width, uint32_t height, 
   const mwSize dims[3] = {height, width, components};
   mxArray* out = mxCreateNumericArray(components > 1 ? 3 : 2, dims, class_id, mxREAL);
   T* dst = static_cast<T*>(mxGetData(out));
-  const std::size_t plane = std::size_t(width) * height;
-  const char* base = image.data().data();
-  for (uint32_t r = 0; r < height; ++r) {
-    const char* src = base + std::size_t(r) * image.stride();
-    T* column = dst + r;
-    for (uint32_t c = 0; c < width; ++c, column += height) {
-      for (uint32_t k = 0; k < components; ++k, src += sizeof(T)) {
+  const std::size_t stride = image.stride();
+  for (uint32_t k = 0; k < components; ++k) {
+    for (uint32_t c = 0; c < width; ++c) {
+      const char* src = image.data().data() + (std::size_t(c) * components + k) * sizeof(T);
+      for (uint32_t r = 0; r < height; ++r, src += stride, ++dst) {
         if constexpr (sizeof(T) == 1) {
-          column[k * plane] = static_cast<T>(*src);
+          *dst = static_cast<T>(*src);
         } else {
-          std::memcpy(column + k * plane, src, sizeof(T));  // little-endian host, as the wire
+          std::memcpy(dst, src, sizeof(T));  // little-endian host, as the wire; no alignment assumed
         }
       }
     }
@@ -82,17 +89,21 @@ mxArray* ImageArray(const proto::Image& image, uint32_t width, uint32_t height, 
 
 mxArray* ImageToArray(const proto::Image& image, uint32_t width, uint32_t height) {
   switch (image.element()) {
-    case proto::ELEMENT_TYPE_U8: return ImageArray<uint8_t>(image, width, height, mxUINT8_CLASS);
-    case proto::ELEMENT_TYPE_U16: return ImageArray<uint16_t>(image, width, height, mxUINT16_CLASS);
-    case proto::ELEMENT_TYPE_F32: return ImageArray<float>(image, width, height, mxSINGLE_CLASS);
-    default: throw ConnectionError("frame image of channel " + proto::Channel_Name(image.channel()) +
-                                   " has an unknown element type " + std::to_string(image.element()));
+    case proto::ELEMENT_TYPE_U8:
+      return ImageArray<uint8_t>(image, width, height, mxUINT8_CLASS);
+    case proto::ELEMENT_TYPE_U16:
+      return ImageArray<uint16_t>(image, width, height, mxUINT16_CLASS);
+    case proto::ELEMENT_TYPE_F32:
+      return ImageArray<float>(image, width, height, mxSINGLE_CLASS);
+    default:
+      throw ConnectionError("frame image of channel " + proto::Channel_Name(image.channel()) +
+                            " has an unknown element type " + std::to_string(image.element()));
   }
 }
 
 mxArray* Boxes(const proto::Frame& frame) {
-  mxArray* boxes = StructColumn(frame.boxes_size(), {"object_id", "object_class", "x", "y", "width", "height",
-                                                     "visibility", "visible_pixels"});
+  mxArray* boxes = StructColumn(
+      frame.boxes_size(), {"object_id", "object_class", "x", "y", "width", "height", "visibility", "visible_pixels"});
   for (int i = 0; i < frame.boxes_size(); ++i) {
     const proto::Box& b = frame.boxes(i);
     mxSetFieldByNumber(boxes, i, 0, Scalar(b.object_id()));

@@ -37,13 +37,36 @@ struct BadArgument : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-std::map<int, std::unique_ptr<Client>>& Clients() {
-  static auto* clients = new std::map<int, std::unique_ptr<Client>>();  // outlives static destruction order
-  return *clients;
+struct Session {
+  Client client;
+  std::string lockstep_camera;  // the camera of a lockstep subscription, "" if none
+};
+
+std::map<int, std::unique_ptr<Session>>& Sessions() {
+  static auto* sessions = new std::map<int, std::unique_ptr<Session>>();  // outlives static destruction order
+  return *sessions;
 }
 int g_next_handle = 1;
 
-void CloseAll() { Clients().clear(); }  // ~Client closes each connection
+// UDP has no goodbye: a lockstep subscription would hold the simulation
+// until the registration lapses (--udp-expiry-ms); an on-request one in its
+// place releases it at once and is sent nothing.
+void CloseSession(Session& session) {
+  if (session.client.udp() && !session.lockstep_camera.empty()) {
+    try {
+      session.client.Subscribe(session.lockstep_camera, {proto::CHANNEL_RGB}, proto::DELIVERY_ON_REQUEST, false,
+                               Ms(500));
+    } catch (const std::exception&) {
+      // the daemon is gone or refused: nothing is held then
+    }
+  }
+  session.client.Close();
+}
+
+void CloseAll() {
+  for (auto& [handle, session] : Sessions()) CloseSession(*session);
+  Sessions().clear();
+}
 
 // The arguments of one command (after the command string), with checks that
 // name the command and its usage.
@@ -80,7 +103,7 @@ class Call {
   }
   std::string String(int i, const char* what) const { return StringOf(prhs_[i], what); }
   std::string StringOf(const mxArray* a, const char* what) const {
-    if (!mxIsChar(a) || (mxGetM(a) > 1)) Fail(std::string(what) + " must be a character string");
+    if (!a || !mxIsChar(a) || mxGetM(a) > 1) Fail(std::string(what) + " must be a character string");
     char* text = mxArrayToString(a);
     std::string out = text ? text : "";
     mxFree(text);
@@ -98,14 +121,15 @@ class Call {
     }
     return out;
   }
-  Client& Handle() const {
+  Session& Handle() const {
     const mxArray* a = nrhs_ > 0 ? prhs_[0] : nullptr;
     const double v = a && mxIsDouble(a) && !mxIsComplex(a) && mxGetNumberOfElements(a) == 1 ? mxGetScalar(a) : NAN;
-    const auto found = std::isfinite(v) && v == std::floor(v) ? Clients().find(static_cast<int>(v)) : Clients().end();
-    if (found == Clients().end()) {
+    const auto found = std::isfinite(v) && v == std::floor(v) ? Sessions().find(static_cast<int>(v)) : Sessions().end();
+    if (found == Sessions().end()) {
       const std::string which = std::isfinite(v) ? "handle " + std::to_string(static_cast<long long>(v)) : "the handle";
-      throw BadHandle(command_ + ": " + which +
-                      " is not an open sim4cv connection (closed, or never opened); use the number sim4cv_connect returned");
+      throw BadHandle(
+          command_ + ": " + which +
+          " is not an open sim4cv connection (closed, or never opened); use the number sim4cv_connect returned");
     }
     return *found->second;
   }
@@ -123,9 +147,9 @@ class Call {
 
 proto::Channel ChannelOf(const Call& call, const std::string& name) {
   static const std::map<std::string, proto::Channel> kChannels = {
-      {"rgb", proto::CHANNEL_RGB},           {"depth", proto::CHANNEL_DEPTH},     {"mask", proto::CHANNEL_MASK},
-      {"boxes", proto::CHANNEL_BOXES},       {"semantic", proto::CHANNEL_SEMANTIC},
-      {"normals", proto::CHANNEL_NORMALS},   {"flow", proto::CHANNEL_FLOW}};
+      {"rgb", proto::CHANNEL_RGB},     {"depth", proto::CHANNEL_DEPTH},       {"mask", proto::CHANNEL_MASK},
+      {"boxes", proto::CHANNEL_BOXES}, {"semantic", proto::CHANNEL_SEMANTIC}, {"normals", proto::CHANNEL_NORMALS},
+      {"flow", proto::CHANNEL_FLOW}};
   const auto found = kChannels.find(name);
   if (found == kChannels.end()) {
     call.Fail("unknown channel '" + name + "' (rgb, depth, mask, boxes, semantic, normals, flow)");
@@ -149,7 +173,14 @@ proto::EntityKind KindOf(const Call& call, const std::string& name) {
 
 sim4cv::CameraSetup CameraOf(const Call& call, const mxArray* s) {
   if (!mxIsStruct(s) || mxGetNumberOfElements(s) != 1) call.Fail("the camera must be a 1x1 struct");
-  sim4cv::CameraSetup camera;
+  using Setup = sim4cv::CameraSetup;
+  static const std::map<std::string, double Setup::*> kNumbers = {{"fov_y_deg", &Setup::fov_y_deg},
+                                                                  {"pitch_down_deg", &Setup::pitch_down_deg},
+                                                                  {"yaw_deg", &Setup::yaw_deg},
+                                                                  {"x", &Setup::x},
+                                                                  {"y", &Setup::y},
+                                                                  {"z", &Setup::z}};
+  Setup camera;
   for (int f = 0; f < mxGetNumberOfFields(s); ++f) {
     const std::string field = mxGetFieldNameByNumber(s, f);
     const mxArray* v = mxGetFieldByNumber(s, 0, f);
@@ -159,18 +190,23 @@ sim4cv::CameraSetup CameraOf(const Call& call, const mxArray* s) {
       }
       return mxGetScalar(v);
     };
-    if (field == "name") camera.name = call.StringOf(v, "camera.name");
-    else if (field == "mounted_on") camera.mounted_on = call.StringOf(v, "camera.mounted_on");
-    else if (field == "width") camera.width = static_cast<uint32_t>(number());
-    else if (field == "height") camera.height = static_cast<uint32_t>(number());
-    else if (field == "fov_y_deg") camera.fov_y_deg = number();
-    else if (field == "pitch_down_deg") camera.pitch_down_deg = number();
-    else if (field == "yaw_deg") camera.yaw_deg = number();
-    else if (field == "gimbal") camera.gimbal = number() != 0;
-    else if (field == "x") camera.x = number();
-    else if (field == "y") camera.y = number();
-    else if (field == "z") camera.z = number();
-    else call.Fail("unknown camera field '" + field + "' (name, mounted_on, width, height, fov_y_deg, pitch_down_deg, yaw_deg, gimbal, x, y, z)");
+    const auto size = [&] {
+      const double pixels = number();
+      if (pixels < 0 || pixels > 100000) call.Fail("camera." + field + " must be a pixel count");
+      return static_cast<uint32_t>(pixels);
+    };
+    if (const auto found = kNumbers.find(field); found != kNumbers.end()) {
+      camera.*(found->second) = number();
+    } else if (field == "name" || field == "mounted_on") {
+      (field == "name" ? camera.name : camera.mounted_on) = call.StringOf(v, ("camera." + field).c_str());
+    } else if (field == "width" || field == "height") {
+      (field == "width" ? camera.width : camera.height) = size();
+    } else if (field == "gimbal") {
+      camera.gimbal = number() != 0;
+    } else {
+      call.Fail("unknown camera field '" + field +
+                "' (name, mounted_on, width, height, fov_y_deg, pitch_down_deg, yaw_deg, gimbal, x, y, z)");
+    }
   }
   if (camera.name.empty()) call.Fail("the camera needs a name");
   return camera;
@@ -190,29 +226,36 @@ struct Command {
 };
 
 const Command kCommands[] = {
-    {"connect", 2, 4, "h = sim4cv_mex('connect', address, name [, timeout_ms, protocol_version])", [](const Call& c) {
-       auto client = std::make_unique<Client>();
+    {"connect", 2, 4, "h = sim4cv_mex('connect', address, name [, timeout_ms, protocol_version])",
+     [](const Call& c) {
+       auto session = std::make_unique<Session>();
        const double timeout = c.Number(2, "timeout_ms", 5000);
        const uint32_t version = c.Has(3) ? c.Id(3, "protocol_version") : 0;  // 0: this build's
        if (timeout < 0) c.Fail("timeout_ms must be >= 0");
-       client->Connect(c.String(0, "address"), c.String(1, "name"), Ms(static_cast<int64_t>(timeout)), version);
-       Clients()[g_next_handle] = std::move(client);
+       session->client.Connect(c.String(0, "address"), c.String(1, "name"), Ms(static_cast<int64_t>(timeout)), version);
+       Sessions()[g_next_handle] = std::move(session);
        c.Return(mxCreateDoubleScalar(g_next_handle++));
      }},
-    {"close", 1, 1, "sim4cv_mex('close', h)", [](const Call& c) {
-       c.Handle().Close();
-       Clients().erase(static_cast<int>(mxGetScalar(c.Arg(0))));
-     }},
-    {"subscribe", 4, 4, "sim4cv_mex('subscribe', h, camera, {'rgb','depth','mask','boxes'}, 'lockstep'|'newest'|'on_request')",
+    {"close", 1, 1, "sim4cv_mex('close', h)",
      [](const Call& c) {
-       Client& client = c.Handle();
+       CloseSession(c.Handle());
+       Sessions().erase(static_cast<int>(mxGetScalar(c.Arg(0))));
+     }},
+    {"subscribe", 4, 4,
+     "sim4cv_mex('subscribe', h, camera, {'rgb','depth','mask','boxes'}, 'lockstep'|'newest'|'on_request')",
+     [](const Call& c) {
+       Session& session = c.Handle();
        std::vector<proto::Channel> channels;
        for (const std::string& name : c.StringList(2, "channels")) channels.push_back(ChannelOf(c, name));
-       client.Subscribe(c.String(1, "camera"), channels, DeliveryOf(c, c.String(3, "delivery")));
+       const std::string camera = c.String(1, "camera");
+       const proto::Delivery delivery = DeliveryOf(c, c.String(3, "delivery"));
+       session.client.Subscribe(camera, channels, delivery);
+       session.lockstep_camera = delivery == proto::DELIVERY_LOCKSTEP ? camera : "";
      }},
-    {"step", 1, 1, "sim4cv_mex('step', h)", [](const Call& c) { c.Handle().Step(); }},
-    {"frame", 2, 3, "f = sim4cv_mex('frame', h, 'next'|'step'|'newest' [, timeout_ms])", [](const Call& c) {
-       Client& client = c.Handle();
+    {"step", 1, 1, "sim4cv_mex('step', h)", [](const Call& c) { c.Handle().client.Step(); }},
+    {"frame", 2, 3, "f = sim4cv_mex('frame', h, 'next'|'step'|'newest' [, timeout_ms])",
+     [](const Call& c) {
+       Client& client = c.Handle().client;
        const std::string mode = c.String(1, "mode");
        const double timeout_ms = c.Number(2, "timeout_ms", 10000);
        if (timeout_ms < 0) c.Fail("timeout_ms must be >= 0");
@@ -232,49 +275,56 @@ const Command kCommands[] = {
          c.Fail("unknown mode '" + mode + "' (next, step, newest)");
        }
      }},
-    {"send_box", 3, 4, "sim4cv_mex('send_box', h, frame_id, [x y w h] [, confidence])", [](const Call& c) {
-       Client& client = c.Handle();
+    {"send_box", 3, 4, "sim4cv_mex('send_box', h, frame_id, [x y w h] [, confidence])",
+     [](const Call& c) {
+       Client& client = c.Handle().client;
        const mxArray* box = c.Arg(2);
        if (!mxIsDouble(box) || mxIsComplex(box) || mxGetNumberOfElements(box) != 4) c.Fail("the box must be [x y w h]");
        const double* b = static_cast<const double*>(mxGetData(box));
        client.SendTrackerOutput(static_cast<uint64_t>(c.Number(1, "frame_id")), float(b[0]), float(b[1]), float(b[2]),
                                 float(b[3]), float(c.Number(3, "confidence", 1.0)));
      }},
-    {"controls", 5, 5, "sim4cv_mex('controls', h, entity_id, steering, throttle, brake)", [](const Call& c) {
-       c.Handle().SendControls(c.Id(1, "entity_id"), float(c.Number(2, "steering")), float(c.Number(3, "throttle")),
-                               float(c.Number(4, "brake")));
+    {"controls", 5, 5, "sim4cv_mex('controls', h, entity_id, steering, throttle, brake)",
+     [](const Call& c) {
+       c.Handle().client.SendControls(c.Id(1, "entity_id"), float(c.Number(2, "steering")),
+                                      float(c.Number(3, "throttle")), float(c.Number(4, "brake")));
      }},
     {"state", 1, 1, "s = sim4cv_mex('state', h)",
-     [](const Call& c) { c.Return(sim4cv::mexbind::StateToStruct(c.Handle().GetState())); }},
-    {"load_map", 2, 2, "w = sim4cv_mex('load_map', h, name)", [](const Call& c) {
-       Client& client = c.Handle();
+     [](const Call& c) { c.Return(sim4cv::mexbind::StateToStruct(c.Handle().client.GetState())); }},
+    {"load_map", 2, 2, "w = sim4cv_mex('load_map', h, name)",
+     [](const Call& c) {
+       Client& client = c.Handle().client;
        c.Return(sim4cv::mexbind::WorldToStruct(client.LoadMapByName(c.String(1, "name"))));
      }},
-    {"spawn", 6, 7, "id = sim4cv_mex('spawn', h, 'car'|'uav'|'pedestrian', name, x, y, z [, yaw_deg])", [](const Call& c) {
-       Client& client = c.Handle();
+    {"spawn", 6, 7, "id = sim4cv_mex('spawn', h, 'car'|'uav'|'pedestrian', name, x, y, z [, yaw_deg])",
+     [](const Call& c) {
+       Client& client = c.Handle().client;
        const uint32_t id = client.Spawn(KindOf(c, c.String(1, "kind")), c.String(2, "name"), c.Number(3, "x"),
                                         c.Number(4, "y"), c.Number(5, "z"), c.Number(6, "yaw_deg", 0));
        c.Return(mxCreateDoubleScalar(id));
      }},
     {"add_camera", 2, 2, "w = sim4cv_mex('add_camera', h, struct('name', ..., 'mounted_on', ..., 'width', ..., ...))",
      [](const Call& c) {
-       Client& client = c.Handle();
+       Client& client = c.Handle().client;
        c.Return(sim4cv::mexbind::WorldToStruct(client.AddCamera(CameraOf(c, c.Arg(1)))));
      }},
     {"uav_follow", 3, 5, "w = sim4cv_mex('uav_follow', h, uav_id, target_id [, altitude, pitch_down_deg])",
      [](const Call& c) {
-       Client& client = c.Handle();
-       c.Return(sim4cv::mexbind::WorldToStruct(client.UavFollow(c.Id(1, "uav_id"), c.Id(2, "target_id"),
-                                                                c.Number(3, "altitude", 0), c.Number(4, "pitch_down_deg", 0))));
+       Client& client = c.Handle().client;
+       c.Return(sim4cv::mexbind::WorldToStruct(client.UavFollow(
+           c.Id(1, "uav_id"), c.Id(2, "target_id"), c.Number(3, "altitude", 0), c.Number(4, "pitch_down_deg", 0))));
      }},
-    {"uav_velocity", 5, 6, "w = sim4cv_mex('uav_velocity', h, uav_id, vx, vy, vz [, yaw_rate_deg])", [](const Call& c) {
-       Client& client = c.Handle();
-       c.Return(sim4cv::mexbind::WorldToStruct(client.UavVelocity(c.Id(1, "uav_id"), c.Number(2, "vx"), c.Number(3, "vy"),
-                                                                  c.Number(4, "vz"), c.Number(5, "yaw_rate_deg", 0))));
+    {"uav_velocity", 5, 6, "w = sim4cv_mex('uav_velocity', h, uav_id, vx, vy, vz [, yaw_rate_deg])",
+     [](const Call& c) {
+       Client& client = c.Handle().client;
+       c.Return(
+           sim4cv::mexbind::WorldToStruct(client.UavVelocity(c.Id(1, "uav_id"), c.Number(2, "vx"), c.Number(3, "vy"),
+                                                             c.Number(4, "vz"), c.Number(5, "yaw_rate_deg", 0))));
      }},
     {"world", 1, 1, "w = sim4cv_mex('world', h)",
-     [](const Call& c) { c.Return(sim4cv::mexbind::WorldToStruct(c.Handle().GetWorld())); }},
-    {"now_ns", 0, 0, "t = sim4cv_mex('now_ns')  % int64 CLOCK_MONOTONIC nanoseconds", [](const Call& c) {
+     [](const Call& c) { c.Return(sim4cv::mexbind::WorldToStruct(c.Handle().client.GetWorld())); }},
+    {"now_ns", 0, 0, "t = sim4cv_mex('now_ns')  % int64 CLOCK_MONOTONIC nanoseconds",
+     [](const Call& c) {
        mxArray* out = mxCreateNumericMatrix(1, 1, mxINT64_CLASS, mxREAL);
        *static_cast<int64_t*>(mxGetData(out)) = MonotonicNs();
        c.Return(out);
@@ -307,11 +357,7 @@ void Dispatch(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
 }  // namespace
 
 void mexFunction(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
-  static bool registered = false;
-  if (!registered) {
-    mexAtExit(CloseAll);
-    registered = true;
-  }
+  mexAtExit(CloseAll);  // every call: Octave forgets it when clearing a file it keeps loaded
   // mexErrMsgIdAndTxt does not return (MATLAB may longjmp past destructors),
   // so the error is kept in statics and raised after every local is gone.
   static std::string id, message;

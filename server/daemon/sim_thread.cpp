@@ -177,7 +177,7 @@ void SimThread::ApplyCommands() {
                    [&](session::SubscribeCommand& c) { Subscribe(client, c); },
                    [&](session::StepCommand&) { scheduler_.AddStep(client); },
                    [&](session::ControlsCommand& c) { ApplyControls(c); },
-                   [&](session::TrackerOutputCommand& c) { RecordTrackerReport(sim_.state(), client, c); },
+                   [&](session::TrackerOutputCommand& c) { ApplyTrackerOutput(client, c); },
                    [&](session::ConfigureCommand& c) { Configure(c); },
                    [&](session::DisconnectCommand&) {
                      scheduler_.Remove(client);
@@ -212,6 +212,17 @@ void SimThread::ApplyControls(session::ControlsCommand& controls) {
   OfferError(controls.link.get(), proto::ERROR_CODE_UNKNOWN_ENTITY,
              "Controls.entity_id " + std::to_string(controls.entity_id) + " is not a car; the world holds " +
                  sim::EntityList(sim_.state()));
+}
+
+void SimThread::ApplyTrackerOutput(session::ClientId client, session::TrackerOutputCommand& output) {
+  std::optional<ReportCamera> camera;
+  if (const auto index = scheduler_.CameraOf(client); index && *index < sim_.cameras().size()) {
+    const sim::CameraSpec& spec = sim_.cameras()[*index];
+    const sim::Entity* mount = spec.mounted_on.empty() ? nullptr : sim_.state().FindByName(spec.mounted_on);
+    camera = ReportCamera{spec.name, mount ? mount->id : 0, spec.width, spec.height};
+  }
+  const std::string problem = RecordTrackerReport(sim_.state(), client, output, camera ? &*camera : nullptr);
+  if (!problem.empty()) OfferError(output.link.get(), proto::ERROR_CODE_INVALID_ARGUMENT, problem);
 }
 
 // Any exception out of carrying out a request becomes that client's Error,

@@ -54,6 +54,9 @@ class SimThread {
   void ApplyCommands();
   void Subscribe(session::ClientId client, session::SubscribeCommand& subscribe);
   void ApplyControls(session::ControlsCommand& controls);
+  // Records a tracker's box (the servo of a kTrack UAV steers by it), or
+  // answers the client an Error saying why not.
+  void ApplyTrackerOutput(session::ClientId client, session::TrackerOutputCommand& output);
   void Configure(session::ConfigureCommand& command);
   // Tells the scheduler and the clients what `change` did; `world` is the
   // answer's WorldInfo. The graphics are already built for it.

@@ -324,10 +324,40 @@ void Simulation::CommandUav(const proto::CommandUav& command) {
       order.yaw_rate = command.velocity().yaw_rate_deg() * kDegrees;
       break;
     }
+    case proto::CommandUav::kTrack:
+      order = TrackOrder(command);
+      break;
     case proto::CommandUav::ORDER_NOT_SET:
-      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "CommandUav needs an order: follow, hold or velocity");
+      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
+                           "CommandUav needs an order: follow, hold, velocity or track");
   }
   Checked([&] { world_->SetUavOrder(state_, command.entity_id(), order); });
+}
+
+sim::UavOrder Simulation::TrackOrder(const proto::CommandUav& command) const {
+  const proto::CommandUav::Track& track = command.track();
+  const sim::Entity& uav = *state_.Find(command.entity_id());
+  const int camera = FindCamera(track.camera());
+  if (camera < 0 || cameras_[static_cast<std::size_t>(camera)].mounted_on != uav.name) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
+                         "CommandUav.track.camera '" + track.camera() + "' is not a camera mounted on '" + uav.name +
+                             "'; its cameras steer it: " + CamerasOn(uav.name));
+  }
+  sim::UavOrder order;
+  order.mode = sim::UavOrder::Mode::kTrack;
+  order.track.reference_height = track.reference_height_px();
+  order.track.altitude = track.altitude() > 0 ? track.altitude() : uav.body.position.z();
+  order.yaw = uav.body.Yaw();
+  return order;
+}
+
+std::string Simulation::CamerasOn(const std::string& entity) const {
+  std::string names;
+  for (const sim::CameraSpec& camera : cameras_) {
+    if (camera.mounted_on != entity) continue;
+    names += (names.empty() ? "'" : ", '") + camera.name + "'";
+  }
+  return names.empty() ? "none (add one with AddCamera)" : names;
 }
 
 void Simulation::AddCamera(const proto::AddCamera& camera) {

@@ -86,6 +86,10 @@ class Simulation {
   uint32_t Spawn(const proto::Spawn& spawn);
   void SetRoute(const proto::SetRoute& route);
   void CommandUav(const proto::CommandUav& command);
+  // CommandUav.track, checked: the camera must be mounted on the UAV.
+  sim::UavOrder TrackOrder(const proto::CommandUav& command) const;
+  // The names of the cameras mounted on `entity`, for messages.
+  std::string CamerasOn(const std::string& entity) const;
   void AddCamera(const proto::AddCamera& camera);
   void RemoveCamera(const std::string& name, Change& change);
   void RemoveEntity(uint32_t id, Change& change);

@@ -246,7 +246,7 @@ Outcome ClientProtocol::HandleTrackerOutput(const proto::TrackerOutput& output, 
     if (!problem.empty()) return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT, problem, false, reply);
   }
   if (!context_.commands.TryPost({client_, TrackerOutputCommand{output.frame_id(), box.x(), box.y(), box.width(),
-                                                                box.height(), output.confidence()}})) {
+                                                                box.height(), output.confidence(), link_.lock()}})) {
     return RefuseBusy("TrackerOutput", reply);
   }
   return Outcome::kNoReply;

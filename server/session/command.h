@@ -84,9 +84,13 @@ struct ConfigureCommand {
   std::shared_ptr<ClientLink> link;
 };
 
+// A tracker's box, finite and of positive size; the sim thread checks it
+// against the client's camera and frames and answers an Error through
+// `link` if it refuses it.
 struct TrackerOutputCommand {
   uint64_t frame_id = 0;
   float x = 0, y = 0, width = 0, height = 0, confidence = 0;
+  std::shared_ptr<ClientLink> link;
 };
 
 // The client is gone: forget its subscription and step credits.

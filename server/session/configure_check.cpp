@@ -151,8 +151,13 @@ std::string CheckCommandUav(const proto::CommandUav& command) {
           .Range("CommandUav.velocity.yaw_rate_deg", command.velocity().yaw_rate_deg(), -180, 180);
       break;
     }
+    case proto::CommandUav::kTrack:
+      check.Name("CommandUav.track.camera", command.track().camera(), false)
+          .Range("CommandUav.track.reference_height_px", command.track().reference_height_px(), 0, 2000)
+          .Range("CommandUav.track.altitude", command.track().altitude(), 0, 500);
+      break;
     case proto::CommandUav::ORDER_NOT_SET:
-      check.True(false, "CommandUav needs an order: follow, hold or velocity");
+      check.True(false, "CommandUav needs an order: follow, hold, velocity or track");
   }
   return check.problem();
 }

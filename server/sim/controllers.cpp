@@ -41,6 +41,8 @@ vehicles::QuadcopterCommand UavCommandFor(const UavOrder& order, const BodyState
       return QuadcopterCommand::Hold(order.position, order.yaw);
     case UavOrder::Mode::kVelocity:
       return QuadcopterCommand::Velocity(order.velocity, order.yaw_rate);
+    case UavOrder::Mode::kTrack:  // World::Step asks TrackCommand (track_servo.h), which keeps memory
+      break;
   }
   return QuadcopterCommand::Hold(uav.position, uav.Yaw());
 }

@@ -38,6 +38,15 @@ struct UavOrder {
     kFollow,    // film `target`: hold station behind and above it (the camera UAV of the paper)
     kHold,      // hold `position` with heading `yaw`
     kVelocity,  // fly `velocity` (world frame) turning at `yaw_rate`
+    kTrack,     // steer by the newest box its cameras' trackers report (track_servo.h)
+  };
+  // kTrack: the servo's settings and memory, part of the state so that a
+  // run repeats exactly.
+  struct Track {
+    double reference_height = 0.0;  // px; 0 until the first box sets it
+    double altitude = 15.0;         // m above the ground
+    double yaw_integral = 0.0;      // of the horizontal offset, s
+    double forward_integral = 0.0;  // of the distance error, s
   };
   Mode mode = Mode::kFollow;
   uint32_t target = 0;                                 // kFollow: entity id
@@ -47,6 +56,7 @@ struct UavOrder {
   double yaw = 0.0;                                    // kHold, rad
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // kVelocity, m/s
   double yaw_rate = 0.0;                               // kVelocity, rad/s
+  Track track;                                         // kTrack
 };
 
 
@@ -70,6 +80,12 @@ struct TrackerReport {
   uint64_t frame_id = 0;
   float x = 0, y = 0, width = 0, height = 0;
   float confidence = 0;
+  // Where the box is: the entity the client's camera is mounted on (0: a
+  // fixed camera) and the camera's size; when it came (State::sim_time).
+  // Not logged: the servo's inputs, rebuilt by the reports of a new run.
+  uint32_t entity_id = 0;
+  uint32_t image_width = 0, image_height = 0;
+  double received_at = 0.0;
 };
 
 struct State {

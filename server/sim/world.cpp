@@ -9,6 +9,7 @@
 
 #include "server/common/check.h"
 #include "server/sim/controllers.h"
+#include "server/sim/track_servo.h"
 #include "server/sim/log/replay_track.h"
 #include "server/sim/traffic_bodies.h"
 #include "server/sim/vehicles/car.h"
@@ -358,7 +359,9 @@ void World::StepPhysics(State& state, double dt) {
       vehicle.car->SetControls(controls);
       vehicle.car->Update(dt);
     } else {
-      vehicle.uav->SetCommand(UavCommandFor(entity.uav_order, entity.body, state));
+      vehicle.uav->SetCommand(entity.uav_order.mode == UavOrder::Mode::kTrack
+                                  ? TrackCommand(entity.uav_order, entity.id, entity.body, state, dt)
+                                  : UavCommandFor(entity.uav_order, entity.body, state));
       vehicle.uav->Update(dt);
     }
   }

@@ -68,6 +68,8 @@ TEST_F(SimThreadHardeningTest, TrackerOutputsOfDepartedClientsAreForgotten) {
     std::vector<std::unique_ptr<Client>> trackers;
     for (int i = 0; i < 4; ++i) {
       trackers.push_back(Connect("tracker" + std::to_string(i)));
+      // A box belongs to the camera its tracker subscribes to (newest: it holds no one back).
+      trackers.back()->Subscribe("uav", {proto::CHANNEL_BOXES}, proto::DELIVERY_NEWEST);
       trackers.back()->SendTrackerOutput(1, 10.0f + i, 20, 30, 40, 0.9f);
       trackers.back()->GetState();  // the report was read before this answer
     }

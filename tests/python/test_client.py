@@ -276,12 +276,23 @@ def test_invalid_requests_are_not_fatal(daemon, connect):
             pb.TrackerOutput(frame_id=1, box=pb.ImageBox(**box), confidence=confidence)))
         expect_error(client, pb.ERROR_CODE_INVALID_ARGUMENT, fatal=False)
 
+    # A box is in the subscribed camera's image, for a frame rendered: the
+    # sim thread refuses others, not fatally (a kTrack UAV steers by boxes).
+    client.send_tracker_output(1, 1.0, 2.0, 3.0, 4.0, 1.0)
+    assert "subscribes to no camera" in expect_error(client, pb.ERROR_CODE_INVALID_ARGUMENT, fatal=False).message
+
     # Valid requests get no Error, and the connection still works.
     client.send_controls(CAR_ID, -1.0, 1.0, 0.0)
-    client.send_tracker_output(0, 1.0, 2.0, 3.0, 4.0, 1.0)
-    expect_state_next(client)
     client.subscribe("uav", ["rgb"], "lockstep")
     assert client.step_and_receive(FRAME_TIMEOUT_S).frame_id == 1
+    client.send_tracker_output(1, 1.0, 2.0, 3.0, 4.0, 1.0)
+    expect_state_next(client)
+    assert client.step_and_receive(FRAME_TIMEOUT_S).frame_id == 2
+    for frame_id, x, says in ((1, 1.0, "already reported frame 1"), (0, 1.0, "was never rendered"),
+                              (3, 1.0, "was never rendered (the newest is 2)"),
+                              (2, 5000.0, "lies far outside the 320x180 image of camera 'uav'")):
+        client.send_tracker_output(frame_id, x, 2.0, 3.0, 4.0, 1.0)
+        assert says in expect_error(client, pb.ERROR_CODE_INVALID_ARGUMENT, fatal=False).message
 
 
 @pytest.mark.parametrize("case", ["before-hello", "garbage", "empty", "server-kind", "too-large"])

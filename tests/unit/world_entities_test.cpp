@@ -21,6 +21,13 @@
 namespace sim4cv::sim {
 namespace {
 
+UavOrder FollowOrder(uint32_t target) {
+  UavOrder order;
+  order.mode = UavOrder::Mode::kFollow;
+  order.target = target;
+  return order;
+}
+
 constexpr double kDt = 1.0 / 240.0;
 
 void Simulate(World& world, State& state, double seconds) {
@@ -93,7 +100,7 @@ TEST_F(WorldEntitiesTest, ErrorsNameTheIdAndTheKind) {
   const uint32_t car = world_.Spawn(state_, EntityKind::kCar, "", {{30, -60, 0}, 0});
   EXPECT_NE(ErrorOf([&] { world_.SetCruiseSpeed(state_, car, 4); }).find("has no route"), std::string::npos);
   EXPECT_NE(ErrorOf([&] {
-              world_.SetUavOrder(state_, kUavEntityId, {UavOrder::Mode::kFollow, 77});
+              world_.SetUavOrder(state_, kUavEntityId, FollowOrder(77));
             }).find("cannot follow entity 77"),
             std::string::npos);
 }
@@ -148,7 +155,7 @@ TEST_F(WorldEntitiesTest, FourUavsFilmTheCarEachFromItsOwnStation) {
 
 TEST_F(WorldEntitiesTest, RemovingAFollowedCarMakesItsUavHold) {
   const uint32_t car = world_.Spawn(state_, EntityKind::kCar, "", {{30, -60, 0}, 0});
-  world_.SetUavOrder(state_, kUavEntityId, {UavOrder::Mode::kFollow, car});
+  world_.SetUavOrder(state_, kUavEntityId, FollowOrder(car));
   Simulate(world_, state_, 1.0);
   world_.Remove(state_, car);
   const Entity& uav = *state_.Find(kUavEntityId);

@@ -1,0 +1,12 @@
+function mosse_test(address, frames)
+% MOSSE_TEST  The MOSSE example (clients/matlab/examples/mosse_tracker.m)
+% flies the UAV in the loop for `frames` frames (default 60) at `address`
+% (shared memory in tests/octave/run.sh) and must keep a mean IoU with the
+% car's ground-truth box above 0.5.
+  if nargin < 2, frames = 60; end
+  iou = mosse_tracker(address, frames);
+  if ~(iou > 0.5)
+    error('mosse_test:failed', 'mean IoU %.3f over %d frames, not above 0.5', iou, frames);
+  end
+  printf('mosse_test: mean IoU %.3f over %d frames passed\n', iou, frames);
+end
