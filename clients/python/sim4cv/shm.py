@@ -323,6 +323,11 @@ class ShmClient(BaseClient):
         start = time.monotonic()
         deadline = None if timeout is None else start + timeout
         while True:
+            if time.monotonic() - self._last_send >= self.keepalive_interval:
+                # Before anything else: a reader whose frames are always
+                # there at once never waits, yet must be heard from.
+                self._keepalive_states += 1
+                self._send(envelope(get_state=pb.GetState()))
             seen = word()
             self._read_responses()
             self._raise_errors()
@@ -334,10 +339,6 @@ class ShmClient(BaseClient):
             if deadline is not None and now >= deadline:
                 raise TimeoutError("nothing from sim4cvd at %s (shared memory) within %.2f s"
                                    % (self.address, timeout))
-            if now - self._last_send >= self.keepalive_interval:
-                self._keepalive_states += 1
-                self._send(envelope(get_state=pb.GetState()))
-                continue
             nap = min(_WAIT_SLICE_S, self._last_send + self.keepalive_interval - now,
                       _WAIT_SLICE_S if deadline is None else deadline - now)
             if self.use_futex:

@@ -141,8 +141,8 @@ class Client {
   bool ReceiveFrame(proto::Frame& frame, Duration timeout = Duration(10000));
   // Step() then ReceiveFrame(); throws ConnectionError on timeout.
   const proto::Frame& StepAndReceive(Duration timeout = Duration(10000));
-  // Newest frame on request (subscribe with DELIVERY_ON_REQUEST; over shared
-  // memory any delivery): the newest frame this client was not given yet,
+  // Newest frame on request (subscribe with DELIVERY_ON_REQUEST): the newest
+  // frame this client was not given yet (over shared memory: the ring's),
   // else the next one rendered; at most one frame period plus its transfer
   // old. Frames queued before are dropped as stale. Throws ConnectionError
   // on timeout.

@@ -17,6 +17,9 @@ using Envelope = proto::Envelope;
 
 // While waiting for a frame, replies (an Error, say) are looked for this often.
 constexpr auto kReplyPoll = std::chrono::milliseconds(5);
+// A client that only reads frames sends a GetState this often, so the daemon
+// (--shm-expiry-ms, 5 s by default) keeps its attachment; the State is dropped.
+constexpr auto kKeepAlive = std::chrono::seconds(1);
 
 std::chrono::milliseconds Until(Deadline deadline) {
   return std::max(std::chrono::milliseconds(0), std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()));
@@ -68,19 +71,21 @@ class ShmLink : public Link {
   }
 
   void Send(const Envelope& envelope) override {
-    if (envelope.has_next_frame()) return;  // the ring always holds the newest frame: Receive takes it
     shm_.SendEnvelope(envelope);
+    last_send_ = Clock::now();
   }
   void SendRaw(const void* data, std::size_t size) override { shm_.SendRaw(data, size); }
 
   bool Receive(Envelope& out, Deadline deadline, bool frame_wanted) override {
-    if (!frame_wanted) return shm_.ReceiveReply(out, Until(deadline));
+    KeepAlive();
+    if (!frame_wanted) return Reply(out, deadline);
     for (;;) {
-      if (shm_.ReceiveReply(out, std::chrono::milliseconds(0))) return true;
+      if (Reply(out, Clock::now())) return true;
       if (shm_.newest_frame_id() > last_frame_id_ && TakeNewest(out)) return true;
       const auto now = Clock::now();
       if (now >= deadline) return false;
       shm_.WaitForFrame(last_frame_id_, std::min(Until(deadline), kReplyPoll));
+      KeepAlive();
     }
   }
 
@@ -107,6 +112,23 @@ class ShmLink : public Link {
   ShmClient* shm() override { return &shm_; }
 
  private:
+  void KeepAlive() {
+    if (Clock::now() - last_send_ < kKeepAlive || !shm_.attached()) return;
+    Envelope request;
+    request.mutable_get_state();
+    Send(request);
+    ++keepalive_states_;
+  }
+
+  // The next reply that is not the answer to a keep-alive.
+  bool Reply(Envelope& out, Deadline deadline) {
+    while (shm_.ReceiveReply(out, Until(deadline))) {
+      if (!(out.has_state() && keepalive_states_ > 0)) return true;
+      --keepalive_states_;
+    }
+    return false;
+  }
+
   // The newest frame, if it is newer than the last one taken; false if the
   // daemon overwrote it while it was copied (the caller looks again).
   bool TakeNewest(Envelope& out) {
@@ -122,6 +144,8 @@ class ShmLink : public Link {
   ShmClient shm_;
   FrameView view_;
   uint64_t last_frame_id_ = 0;
+  Clock::time_point last_send_ = Clock::now();
+  uint32_t keepalive_states_ = 0;
   proto::Welcome welcome_;
   std::unique_ptr<Link> tcp_;
 };
