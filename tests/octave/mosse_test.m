@@ -9,4 +9,10 @@ function mosse_test(address, frames)
     error('mosse_test:failed', 'mean IoU %.3f over %d frames, not above 0.5', iou, frames);
   end
   printf('mosse_test: mean IoU %.3f over %d frames passed\n', iou, frames);
+  % The tracker loop docs/clients.md shows runs as written.
+  box = ssd_tracker_loop(address, 30);
+  if ~(numel(box) == 4 && all(box(3:4) > 0))
+    error('mosse_test:failed', 'ssd_tracker_loop ended with box %s', mat2str(box));
+  end
+  printf('ssd_tracker_loop: 30 frames, last box %s\n', mat2str(box));
 end
