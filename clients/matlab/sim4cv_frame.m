@@ -7,7 +7,7 @@ function f = sim4cv_frame(h, mode, timeout_ms)
 %   mode 'step' (default) steps a lockstep subscription and waits for the
 %   frame; 'next' waits for the next frame (after sim4cv_step, or with
 %   'newest' delivery); 'newest' asks for the newest frame not received yet
-%   ('on_request' delivery; over shared memory any delivery). timeout_ms
+%   ('on_request' delivery, on every transport). timeout_ms
 %   defaults to 10000; no frame by then is a sim4cv:connection error, as is
 %   a daemon that went away.
 %

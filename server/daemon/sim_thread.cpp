@@ -7,8 +7,8 @@
 #include <chrono>
 #include <future>
 
-#include "server/common/limits.h"
 #include "server/common/diagnostics.h"
+#include "server/common/limits.h"
 #include "server/daemon/state_message.h"
 #include "server/daemon/tracker_reports.h"
 #include "server/render/gl_context.h"

@@ -86,8 +86,8 @@ void Simulation::Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change
   if (replay_) world->SetReplay(replay_, config_.replay_only);
   sim::State state = world->InitialState();
   std::vector<sim::CameraSpec> cameras = scene->cameras;
-  replaced_.emplace(Replaced{std::move(scene_), std::move(world_), std::move(state_), std::move(cameras_),
-                             conditions_, episodes_});
+  replaced_.emplace(
+      Replaced{std::move(scene_), std::move(world_), std::move(state_), std::move(cameras_), conditions_, episodes_});
   world_ = std::move(world);
   scene_ = std::move(scene);
   state_ = std::move(state);
@@ -238,9 +238,9 @@ void Simulation::RefuseWhileLogging(const char* request, const char* why) const 
 const sim::Entity& Simulation::EntityOf(uint32_t id, const char* what) const {
   const sim::Entity* entity = state_.Find(id);
   if (!entity) {
-    throw ConfigureError(
-        proto::ERROR_CODE_UNKNOWN_ENTITY,
-        std::string(what) + ": no entity has id " + std::to_string(id) + "; the world holds " + sim::EntityList(state_));
+    throw ConfigureError(proto::ERROR_CODE_UNKNOWN_ENTITY, std::string(what) + ": no entity has id " +
+                                                               std::to_string(id) + "; the world holds " +
+                                                               sim::EntityList(state_));
   }
   return *entity;
 }
@@ -339,13 +339,16 @@ sim::UavOrder Simulation::TrackOrder(const proto::CommandUav& command) const {
   const sim::Entity& uav = *state_.Find(command.entity_id());
   const int camera = FindCamera(track.camera());
   if (camera < 0 || cameras_[static_cast<std::size_t>(camera)].mounted_on != uav.name) {
-    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
-                         "CommandUav.track.camera '" + track.camera() + "' is not a camera mounted on '" + uav.name +
-                             "'; its cameras steer it: " + CamerasOn(uav.name));
+    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "CommandUav.track.camera '" + track.camera() +
+                                                                 "' is not a camera mounted on '" + uav.name +
+                                                                 "'; its cameras steer it: " + CamerasOn(uav.name));
   }
+  const sim::CameraSpec& spec = cameras_[static_cast<std::size_t>(camera)];
   sim::UavOrder order;
   order.mode = sim::UavOrder::Mode::kTrack;
-  order.track.reference_height = track.reference_height_px();
+  order.track.fov_y = spec.fov_y_deg * kDegrees;
+  order.track.pitch_down = spec.pitch_down_deg * kDegrees;
+  order.track.distance = track.distance();
   order.track.altitude = track.altitude() > 0 ? track.altitude() : uav.body.position.z();
   order.yaw = uav.body.Yaw();
   return order;

@@ -15,8 +15,8 @@ bool FarOutside(const session::TrackerOutputCommand& box, const ReportCamera& ca
 
 }  // namespace
 
-std::string RecordTrackerReport(sim::State& state, session::ClientId client, const session::TrackerOutputCommand& output,
-                                const ReportCamera* camera) {
+std::string RecordTrackerReport(sim::State& state, session::ClientId client,
+                                const session::TrackerOutputCommand& output, const ReportCamera* camera) {
   std::ostringstream problem;
   problem << "TrackerOutput for frame " << output.frame_id << " ignored: ";
   if (!camera) {
@@ -33,8 +33,7 @@ std::string RecordTrackerReport(sim::State& state, session::ClientId client, con
                                    [](const sim::TrackerReport& r, session::ClientId id) { return r.client_id < id; });
   const bool known = it != reports.end() && it->client_id == client;
   if (known && output.frame_id <= it->frame_id) {
-    problem << "this client already reported frame " << it->frame_id
-            << "; answer each frame at most once, in order";
+    problem << "this client already reported frame " << it->frame_id << "; answer each frame at most once, in order";
     return problem.str();
   }
   if (FarOutside(output, *camera)) {
@@ -43,9 +42,9 @@ std::string RecordTrackerReport(sim::State& state, session::ClientId client, con
             << camera->name << "'";
     return problem.str();
   }
-  const sim::TrackerReport report{client,           output.frame_id, output.x,      output.y,      output.width,
-                                  output.height,    output.confidence, camera->entity_id, camera->width, camera->height,
-                                  state.sim_time};
+  const sim::TrackerReport report{client,        output.frame_id, output.x,          output.y,
+                                  output.width,  output.height,   output.confidence, camera->entity_id,
+                                  camera->width, camera->height,  state.sim_time};
   if (known) {
     *it = report;
   } else {

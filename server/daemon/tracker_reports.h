@@ -15,7 +15,7 @@ namespace sim4cv::daemon {
 
 // The camera a client's boxes are in (the one it subscribes to).
 struct ReportCamera {
-  std::string_view name;  // the camera list's, valid while it is
+  std::string_view name;   // the camera list's, valid while it is
   uint32_t entity_id = 0;  // the entity it is mounted on; 0: fixed in the world
   uint32_t width = 0, height = 0;
 };
@@ -24,8 +24,8 @@ struct ReportCamera {
 // if it is a box in `camera` (nullptr: the client subscribes to none) for a
 // frame rendered already and after the client's last report. Otherwise
 // changes nothing and returns why, for the client's Error.
-std::string RecordTrackerReport(sim::State& state, session::ClientId client, const session::TrackerOutputCommand& output,
-                                const ReportCamera* camera);
+std::string RecordTrackerReport(sim::State& state, session::ClientId client,
+                                const session::TrackerOutputCommand& output, const ReportCamera* camera);
 // Erases `client`'s report, if any.
 void ForgetTrackerReport(sim::State& state, session::ClientId client);
 

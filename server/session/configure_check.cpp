@@ -153,7 +153,7 @@ std::string CheckCommandUav(const proto::CommandUav& command) {
     }
     case proto::CommandUav::kTrack:
       check.Name("CommandUav.track.camera", command.track().camera(), false)
-          .Range("CommandUav.track.reference_height_px", command.track().reference_height_px(), 0, 2000)
+          .Range("CommandUav.track.distance", command.track().distance(), 0, 500)
           .Range("CommandUav.track.altitude", command.track().altitude(), 0, 500);
       break;
     case proto::CommandUav::ORDER_NOT_SET:

@@ -43,10 +43,17 @@ struct UavOrder {
   // kTrack: the servo's settings and memory, part of the state so that a
   // run repeats exactly.
   struct Track {
-    double reference_height = 0.0;  // px; 0 until the first box sets it
-    double altitude = 15.0;         // m above the ground
-    double yaw_integral = 0.0;      // of the horizontal offset, s
-    double forward_integral = 0.0;  // of the distance error, s
+    // The camera the boxes are in (copied at the order: the servo needs no scene).
+    double fov_y = 1.047;        // rad
+    double pitch_down = 1.047;   // rad below the horizon (a gimbal holds it)
+    double altitude = 15.0;      // m above the ground to hold
+    double distance = 0.0;       // m behind the target to hold; 0: where the camera centre looks
+    // Memory: the target's estimated position and velocity on the ground
+    // (world frame), from the newest box used.
+    uint64_t frame = 0;          // the report's frame_id; 0: none yet
+    double time = 0.0;           // sim_time the report came
+    Eigen::Vector2d target = Eigen::Vector2d::Zero();
+    Eigen::Vector2d velocity = Eigen::Vector2d::Zero();
   };
   Mode mode = Mode::kFollow;
   uint32_t target = 0;                                 // kFollow: entity id

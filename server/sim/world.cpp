@@ -360,7 +360,7 @@ void World::StepPhysics(State& state, double dt) {
       vehicle.car->Update(dt);
     } else {
       vehicle.uav->SetCommand(entity.uav_order.mode == UavOrder::Mode::kTrack
-                                  ? TrackCommand(entity.uav_order, entity.id, entity.body, state, dt)
+                                  ? TrackCommand(entity.uav_order, entity.id, entity.body, state)
                                   : UavCommandFor(entity.uav_order, entity.body, state));
       vehicle.uav->Update(dt);
     }

@@ -27,3 +27,4 @@ sim4cv_test(integration configure_effects_test sim4cv_client sim4cv_common)  # e
 sim4cv_test(integration client_transports_test sim4cv_client)
 target_compile_definitions(client_transports_test PRIVATE SIM4CV_TRACKER_LOOP="$<TARGET_FILE:sim4cv_tracker_loop>")
 add_dependencies(client_transports_test sim4cv_tracker_loop)
+sim4cv_test(integration tracking_servo_test sim4cv_client)

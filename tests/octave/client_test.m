@@ -178,7 +178,7 @@ function check_daemon_killed(tcp, udp, shm, pid)
   hs = sim4cv_connect(shm, 'octave-kill-shm');
   sim4cv_subscribe(ht, 'uav', {'rgb'}, 'lockstep');
   sim4cv_subscribe(hu, 'uav', {'rgb'}, 'on_request');    % neither holds lockstep back
-  sim4cv_subscribe(hs, 'uav', {'rgb'}, 'newest');
+  sim4cv_subscribe(hs, 'uav', {'rgb'}, 'on_request');
   sim4cv_frame(ht, 'step');
   sim4cv_frame(hu, 'newest');
   sim4cv_frame(hs, 'newest');

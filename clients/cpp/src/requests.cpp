@@ -167,6 +167,16 @@ proto::Configure UavVelocityRequest(uint32_t uav_id, double vx, double vy, doubl
   return request;
 }
 
+proto::Configure UavTrackRequest(uint32_t uav_id, const std::string& camera, double distance, double altitude) {
+  proto::Configure request;
+  proto::CommandUav& command = *request.mutable_command_uav();
+  command.set_entity_id(uav_id);
+  command.mutable_track()->set_camera(camera);
+  command.mutable_track()->set_distance(distance);
+  command.mutable_track()->set_altitude(altitude);
+  return request;
+}
+
 proto::Configure AddCameraRequest(const CameraSetup& camera) {
   proto::Configure request;
   proto::AddCamera& add = *request.mutable_add_camera();

@@ -41,6 +41,7 @@ proto::Configure SetSpeedRequest(uint32_t entity_id, float speed);
 proto::Configure UavFollowRequest(uint32_t uav_id, uint32_t target_id, double altitude, double pitch_down_deg);
 proto::Configure UavHoldRequest(uint32_t uav_id, double x, double y, double z, double yaw_deg);
 proto::Configure UavVelocityRequest(uint32_t uav_id, double vx, double vy, double vz, double yaw_rate_deg);
+proto::Configure UavTrackRequest(uint32_t uav_id, const std::string& camera, double distance, double altitude);
 proto::Configure AddCameraRequest(const CameraSetup& camera);
 proto::Configure RemoveCameraRequest(const std::string& name);
 proto::Configure ResetRequest();

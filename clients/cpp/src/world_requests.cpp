@@ -51,6 +51,10 @@ proto::WorldInfo Client::UavVelocity(uint32_t uav_id, double vx, double vy, doub
   return ConfigureWorld(detail::UavVelocityRequest(uav_id, vx, vy, vz, yaw_rate_deg));
 }
 
+proto::WorldInfo Client::UavTrack(uint32_t uav_id, const std::string& camera, double distance, double altitude) {
+  return ConfigureWorld(detail::UavTrackRequest(uav_id, camera, distance, altitude));
+}
+
 proto::WorldInfo Client::AddCamera(const CameraSetup& camera) {
   return ConfigureWorld(detail::AddCameraRequest(camera));
 }

@@ -107,6 +107,15 @@ class WorldRequests:
         velocity = pb.CommandUav.Velocity(velocity=pb.Vec3(x=vx, y=vy, z=vz), yaw_rate_deg=yaw_rate_deg)
         return self._configure_world(command_uav=pb.CommandUav(entity_id=entity_id, velocity=velocity))
 
+    def uav_track(self, entity_id, camera, distance=0.0, altitude=0.0):
+        """Tracking in the loop: the UAV steers by the boxes that trackers of
+        its camera `camera` send (send_tracker_output of clients subscribed
+        to it): it holds station `distance` metres behind where the newest box
+        puts the target (0: where the camera centre looks), at `altitude`
+        metres (0: the current one)."""
+        track = pb.CommandUav.Track(camera=camera, distance=distance, altitude=altitude)
+        return self._configure_world(command_uav=pb.CommandUav(entity_id=entity_id, track=track))
+
     def add_camera(self, name, mounted_on="", width=320, height=180, fov_y_deg=60.0, pitch_down_deg=0.0,
                    yaw_deg=0.0, gimbal=False, offset=(0.0, 0.0, 0.0)):
         """Adds a camera on the entity called `mounted_on` (offset in its body

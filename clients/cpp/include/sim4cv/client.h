@@ -198,6 +198,12 @@ class Client {
   proto::WorldInfo UavFollow(uint32_t uav_id, uint32_t target_id, double altitude = 0, double pitch_down_deg = 0);
   proto::WorldInfo UavHold(uint32_t uav_id, double x, double y, double z, double yaw_deg = 0);
   proto::WorldInfo UavVelocity(uint32_t uav_id, double vx, double vy, double vz, double yaw_rate_deg = 0);
+  // Tracking in the loop: the UAV steers by the boxes its camera `camera`'s
+  // trackers send (SendTrackerOutput of clients subscribed to it): it holds
+  // station `distance` metres behind where the newest box puts the target
+  // (0: where the camera centre looks), at `altitude` (0: the current one).
+  // docs/tracking.md, "The servo".
+  proto::WorldInfo UavTrack(uint32_t uav_id, const std::string& camera, double distance = 0, double altitude = 0);
   proto::WorldInfo AddCamera(const CameraSetup& camera);
   // Removes a camera AddCamera added; its subscribers get an UNKNOWN_CAMERA Error.
   proto::WorldInfo RemoveCamera(const std::string& name);
