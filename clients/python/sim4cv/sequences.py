@@ -34,19 +34,15 @@ import glob
 import json
 import math
 import os
-import queue
-import re
 import shutil
-import subprocess
 import sys
-import threading
 import time
 
 import numpy as np
 
 from . import attributes as attrs
+from .daemon import REPO_ROOT, OwnDaemon
 
-REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
 MAPS_DIR = os.path.join(REPO_ROOT, "scenes")
 TRACKING_MAPS = ["tracking/easy_desert", "tracking/easy_urban", "tracking/hard_desert", "tracking/hard_urban"]
 DEFAULT_SPEEDS = (4.0, 6.0, 8.0)
@@ -54,7 +50,6 @@ EXTRA_CHANNELS = ("depth", "mask", "semantic", "normals", "flow")
 CONDITIONS = ("clear_noon", "clear_morning", "overcast", "fog", "dusk", "night", "rain")
 JPEG_QUALITY = 95
 PIPELINE_STEPS = 4  # lockstep Steps kept outstanding, so rendering overlaps our JPEG encoding
-LISTENING = re.compile(r"^sim4cvd listening tcp=(\d+)(\s|$)")
 
 # The paper's offline set: 5 sequences from the two tracking maps (easy, hard) at
 # the three speeds, 3,300-12,700 frames each. Ours: whole laps of the route
@@ -140,69 +135,6 @@ def paper_specs(conditions=None, channels=(), seed=1):
 
 
 # ----------------------------------------------------------------------------- the daemon
-
-
-def daemon_path():
-    path = os.environ.get("SIM4CVD", "build/server/daemon/sim4cvd")
-    if not os.path.isabs(path) and not os.path.exists(path):
-        path = os.path.join(REPO_ROOT, path)
-    return os.path.abspath(path)
-
-
-class OwnDaemon:
-    """A sim4cvd started for one sequence; stdout is drained by a thread."""
-
-    def __init__(self, args, wait_binary_s=60.0, startup_s=60.0):
-        path = daemon_path()
-        deadline = time.monotonic() + wait_binary_s
-        while not os.access(path, os.X_OK):  # other people rebuild it now and then
-            if time.monotonic() > deadline:
-                raise SequenceError("sim4cvd not found or not executable at %s (set SIM4CVD)" % path)
-            time.sleep(1.0)
-        self.args = [path, "--tcp-port", "0", "--mode", "lockstep"] + list(args)
-        self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE)
-        self.lines = queue.Queue()
-        self.stderr_tail = []
-        threading.Thread(target=self._drain, args=(self.proc.stdout, True), daemon=True).start()
-        threading.Thread(target=self._drain, args=(self.proc.stderr, False), daemon=True).start()
-        deadline = time.monotonic() + startup_s
-        while True:
-            try:
-                line = self.lines.get(timeout=max(0.0, deadline - time.monotonic()))
-            except queue.Empty:
-                self.stop()
-                raise SequenceError("sim4cvd printed no listening line within %.0f s" % startup_s) from None
-            if line is None:
-                rc = self.proc.wait()
-                time.sleep(0.1)
-                raise SequenceError("sim4cvd exited with status %s before listening: %s\n%s"
-                                    % (rc, " ".join(self.args), "\n".join(self.stderr_tail[-20:])))
-            match = LISTENING.match(line)
-            if match:
-                self.port = int(match.group(1))
-                self.address = "tcp://127.0.0.1:%d" % self.port
-                return
-
-    def _drain(self, stream, is_stdout):
-        for raw in stream:
-            line = raw.decode("utf-8", "replace").rstrip("\n")
-            if is_stdout:
-                self.lines.put(line)
-            else:
-                self.stderr_tail.append(line)
-                del self.stderr_tail[:-200]
-        if is_stdout:
-            self.lines.put(None)
-
-    def stop(self):
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(20)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
 
 
 # ----------------------------------------------------------------------------- laps
@@ -344,7 +276,7 @@ def generate_sequence(spec, out_root, daemon=None, frame_hook=None, log=None, pr
             args += ["--quality", spec.quality]
         if spec.traffic_cars:
             args += ["--traffic-cars", str(spec.traffic_cars)]
-        own = OwnDaemon(args)
+        own = OwnDaemon(args)  # lockstep
         address = own.address
     else:
         address = daemon if "://" in daemon else "tcp://" + daemon

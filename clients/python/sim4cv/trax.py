@@ -45,15 +45,47 @@ class TraxError(Sim4cvError):
 
 
 def parse_tracker_spec(spec: str) -> str:
-    """The command line of a "trax:COMMAND LINE" tracker specification."""
+    """The command line of a "trax:COMMAND LINE" tracker specification, or
+    of an "octave:FILE.m" one (octave_command)."""
+    if spec.startswith(OCTAVE_PREFIX):
+        return octave_command(spec[len(OCTAVE_PREFIX):])
     if not spec.startswith(SPEC_PREFIX) or not spec[len(SPEC_PREFIX):].strip():
-        raise ValueError("a TraX tracker is given as 'trax:COMMAND LINE', not %r" % (spec,))
+        raise ValueError("a TraX tracker is given as 'trax:COMMAND LINE' or 'octave:FILE.m', not %r" % (spec,))
     return spec[len(SPEC_PREFIX):].strip()
 
 
 def open_tracker(spec: str, **options) -> "TraxTracker":
     """TraxTracker(parse_tracker_spec(spec), **options)."""
     return TraxTracker(parse_tracker_spec(spec), **options)
+
+
+# "octave:FILE.m": a tracker in plain Octave (FILE.m defines tracker = NAME()
+# with the handles init and update), run as a TraX server written in Octave,
+# clients/matlab/trax/sim4cv_trax_server.m. See docs/trax.md, "Octave trackers".
+OCTAVE_PREFIX = "octave:"
+OCTAVE_SERVER_DIR = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                                 "..", "..", "matlab", "trax"))
+
+
+def octave_command(file: str) -> str:
+    """The TraX command line that runs the Octave tracker FILE.m (relative
+    to the working directory): octave --eval of sim4cv_trax_server. ValueError
+    for a name that is not FILE.m; TraxError if the file does not exist."""
+    file = file.strip()
+    if not file.endswith(".m") or len(file) < 3:
+        raise ValueError("an Octave tracker is given as 'octave:FILE.m', not %r" % ("octave:" + file,))
+    path = os.path.abspath(file)
+    if not os.path.isfile(path):
+        raise TraxError("Octave tracker file %s does not exist" % path)
+    if not os.path.isfile(os.path.join(OCTAVE_SERVER_DIR, "sim4cv_trax_server.m")):
+        raise TraxError("Octave trackers need %s/sim4cv_trax_server.m (the repository's clients/matlab/trax)"
+                        % OCTAVE_SERVER_DIR)
+
+    def literal(text):                       # an Octave single-quoted string
+        return "'" + text.replace("'", "''") + "'"
+    expr = "addpath(%s); sim4cv_trax_server(%s)" % (literal(OCTAVE_SERVER_DIR), literal(path))
+    quoted = '"%s"' % expr.replace("\\", "\\\\").replace('"', '\\"')    # as shlex reads it back
+    return "octave --no-gui --no-window-system --quiet --no-history --eval " + quoted
 
 
 def _signal_name(code: int) -> str:

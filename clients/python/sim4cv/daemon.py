@@ -1,0 +1,111 @@
+"""Starting sim4cvd from Python: for tools that run their own daemon
+(sequence generation, tracking sessions, experiments, the active-tracking
+environment) and for tests.
+
+    with OwnDaemon(["--map", "scenes/tracking/hard_urban.map"], mode="realtime") as d:
+        client = sim4cv.connect(d.address)        # tcp://127.0.0.1:PORT
+        d.fields["udp"], d.fields.get("shm")      # every field of the listening line
+
+The binary is $SIM4CVD, or build/server/daemon/sim4cvd under the repository.
+"""
+
+import os
+import queue
+import subprocess
+import threading
+import time
+from typing import Dict, List, Optional, Sequence
+
+REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
+LISTENING_PREFIX = "sim4cvd listening "
+
+
+class DaemonError(RuntimeError):
+    """sim4cvd could not be found or started; the message says why (its
+    command line and the end of its stderr)."""
+
+
+def daemon_path() -> str:
+    path = os.environ.get("SIM4CVD", "build/server/daemon/sim4cvd")
+    if not os.path.isabs(path) and not os.path.exists(path):
+        path = os.path.join(REPO_ROOT, path)
+    return os.path.abspath(path)
+
+
+def parse_listening_line(line: str) -> Optional[Dict[str, str]]:
+    """The key=value fields of a listening line (docs/protocol.md 1), or None."""
+    if not line.startswith(LISTENING_PREFIX):
+        return None
+    return dict(field.split("=", 1) for field in line[len(LISTENING_PREFIX):].split() if "=" in field)
+
+
+class OwnDaemon:
+    """A sim4cvd of our own: --tcp-port 0 and --mode `mode` plus `args`;
+    stdout and stderr are drained by threads (the daemon never blocks on a
+    pipe), the last 200 stderr lines kept for error messages."""
+
+    def __init__(self, args: Sequence[str] = (), mode: str = "lockstep", wait_binary_s: float = 60.0,
+                 startup_s: float = 60.0):
+        path = daemon_path()
+        deadline = time.monotonic() + wait_binary_s
+        while not os.access(path, os.X_OK):  # a rebuild may be replacing it
+            if time.monotonic() > deadline:
+                raise DaemonError("sim4cvd not found or not executable at %s (set SIM4CVD)" % path)
+            time.sleep(1.0)
+        self.args: List[str] = [path, "--tcp-port", "0", "--mode", mode] + list(args)
+        self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE)
+        self._lines: "queue.Queue[Optional[str]]" = queue.Queue()
+        self.stderr_tail: List[str] = []
+        threading.Thread(target=self._drain, args=(self.proc.stdout, True), daemon=True).start()
+        threading.Thread(target=self._drain, args=(self.proc.stderr, False), daemon=True).start()
+        deadline = time.monotonic() + startup_s
+        while True:
+            try:
+                line = self._lines.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                self.stop()
+                raise DaemonError("sim4cvd printed no listening line within %.0f s: %s"
+                                  % (startup_s, " ".join(self.args))) from None
+            if line is None:
+                rc = self.proc.wait()
+                time.sleep(0.1)  # the stderr thread's last lines
+                raise DaemonError("sim4cvd exited with status %s before listening: %s\n%s"
+                                  % (rc, " ".join(self.args), "\n".join(self.stderr_tail[-20:])))
+            fields = parse_listening_line(line)
+            if fields is not None:
+                self.fields = fields
+                self.port = int(fields["tcp"])
+                self.address = "tcp://127.0.0.1:%d" % self.port
+                return
+
+    def _drain(self, stream, is_stdout):
+        for raw in stream:
+            line = raw.decode("utf-8", "replace").rstrip("\n")
+            if is_stdout:
+                self._lines.put(line)
+            else:
+                self.stderr_tail.append(line)
+                del self.stderr_tail[:-200]
+        if is_stdout:
+            self._lines.put(None)
+
+    def running(self) -> bool:
+        return self.proc.poll() is None
+
+    def stop(self) -> Optional[int]:
+        """SIGTERM, then SIGKILL after 20 s; the exit status."""
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(20)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        return self.proc.returncode
+
+    def __enter__(self) -> "OwnDaemon":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()

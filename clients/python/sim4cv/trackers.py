@@ -1,0 +1,186 @@
+"""Tracker specifications: one string names a tracker everywhere sim4cv
+takes one (the command line, experiment files; docs/tracking.md).
+
+    gt                      the ground truth: each frame's true box of the target
+    opencv:NAME             an OpenCV 4.6 tracker: MOSSE, KCF, CSRT, MIL, MedianFlow, TLD, Boosting
+    trax:COMMAND LINE       any TraX tracker process (sim4cv.trax; every VOT tracker)
+    python:MODULE:FACTORY   FACTORY() from MODULE: an object with init(image, box) and update(image) -> box
+    octave:FILE.m           a tracker in plain Octave/MATLAB, run as a TraX server (docs/trax.md)
+
+Every tracker here has `init(image, box)` and `update(image) -> box or
+None` (None: no estimate for this frame), `close()` and `name`; images are
+HxWx3 uint8 RGB, boxes (x, y, w, h) in pixels with the top-left corner of
+the top-left pixel at (0, 0). The ground-truth tracker needs the frame:
+`update(image, frame=...)` on every tracker takes it and only `gt` reads it.
+"""
+
+import importlib
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+BoxTuple = Tuple[float, float, float, float]
+
+# OpenCV 4.6's trackers by name: where cv2 keeps each (main module or legacy).
+_OPENCV = {
+    "mosse": ("legacy", "TrackerMOSSE_create"),
+    "kcf": ("", "TrackerKCF_create"),
+    "csrt": ("", "TrackerCSRT_create"),
+    "mil": ("", "TrackerMIL_create"),
+    "medianflow": ("legacy", "TrackerMedianFlow_create"),
+    "tld": ("legacy", "TrackerTLD_create"),
+    "boosting": ("legacy", "TrackerBoosting_create"),
+    "goturn": ("", "TrackerGOTURN_create"),
+    "dasiamrpn": ("", "TrackerDaSiamRPN_create"),
+}
+
+
+class Tracker:
+    """What every tracker offers; subclasses implement _init and _update."""
+
+    name = "tracker"
+
+    def init(self, image: np.ndarray, box: Sequence[float], frame=None) -> None:
+        self._init(image, tuple(float(v) for v in box), frame)
+
+    def update(self, image: np.ndarray, frame=None) -> Optional[BoxTuple]:
+        return self._update(image, frame)
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _init(self, image, box, frame):
+        raise NotImplementedError
+
+    def _update(self, image, frame):
+        raise NotImplementedError
+
+
+class GroundTruthTracker(Tracker):
+    """The reference run: answers each frame with the target's true visible
+    box, and nothing while the target is hidden (as an annotation would)."""
+
+    name = "gt"
+
+    def __init__(self, target_id: int = 0):
+        self.target_id = target_id
+
+    def _init(self, image, box, frame):
+        pass
+
+    def _update(self, image, frame):
+        if frame is None:
+            raise ValueError("the ground-truth tracker needs the frame: update(image, frame=frame)")
+        box = frame.box(self.target_id)
+        if box is None or box.visibility <= 0:
+            return None
+        return (float(box.x), float(box.y), float(box.width), float(box.height))
+
+
+class OpenCvTracker(Tracker):
+    """One of OpenCV's trackers (cv2, Debian's python3-opencv: the same C++
+    implementations a C++ client links)."""
+
+    def __init__(self, kind: str):
+        import cv2
+        key = kind.lower()
+        if key not in _OPENCV:
+            raise ValueError("opencv:%s is not an OpenCV tracker; choose one of %s"
+                             % (kind, ", ".join(sorted(_OPENCV))))
+        where, factory_name = _OPENCV[key]
+        module = getattr(cv2, where) if where else cv2
+        factory = getattr(module, factory_name, None)
+        if factory is None:
+            raise ValueError("this OpenCV (%s) has no %s tracker" % (cv2.__version__, kind))
+        self._factory = factory
+        self._cv2 = cv2
+        self._tracker = None
+        self.name = "opencv:" + key
+
+    def _init(self, image, box, frame):
+        self._tracker = self._factory()
+        bgr = self._cv2.cvtColor(image, self._cv2.COLOR_RGB2BGR)
+        x, y, w, h = box
+        self._tracker.init(bgr, (int(round(x)), int(round(y)), max(1, int(round(w))), max(1, int(round(h)))))
+
+    def _update(self, image, frame):
+        # A tracker that doubts itself (MOSSE's peak-to-sidelobe test, KCF's
+        # peak) still says where it looks; that box is its answer, as in
+        # the trackers' own benchmarks. Only no box at all is no answer.
+        _, box = self._tracker.update(self._cv2.cvtColor(image, self._cv2.COLOR_RGB2BGR))
+        x, y, w, h = (float(v) for v in box)
+        return (x, y, w, h) if w > 0 and h > 0 else None
+
+
+class PythonTracker(Tracker):
+    """FACTORY() from MODULE: any object with init(image, box) and
+    update(image) -> (x, y, w, h) or None."""
+
+    def __init__(self, module: str, factory: str):
+        try:
+            made = getattr(importlib.import_module(module), factory)()
+        except (ImportError, AttributeError) as e:
+            raise ValueError("python:%s:%s: %s" % (module, factory, e)) from e
+        for method in ("init", "update"):
+            if not callable(getattr(made, method, None)):
+                raise ValueError("python:%s:%s made %r, which has no %s(...) method" % (module, factory, made, method))
+        self._tracker = made
+        self.name = "python:%s:%s" % (module, factory)
+
+    def _init(self, image, box, frame):
+        self._tracker.init(image, box)
+
+    def _update(self, image, frame):
+        box = self._tracker.update(image)
+        if box is None:
+            return None
+        x, y, w, h = (float(v) for v in box)
+        return (x, y, w, h)
+
+    def close(self):
+        close = getattr(self._tracker, "close", None)
+        if callable(close):
+            close()
+
+
+class TraxTrackerAdapter(Tracker):
+    """A TraX tracker process (sim4cv.trax.TraxTracker); `octave:FILE.m`
+    runs as one too."""
+
+    def __init__(self, spec: str, timeout: float = 30.0):
+        from . import trax
+        self._tracker = trax.open_tracker(spec, timeout=timeout)
+        self.name = spec
+
+    def _init(self, image, box, frame):
+        self._tracker.init(image, box)
+
+    def _update(self, image, frame):
+        return self._tracker.update(image)
+
+    def close(self):
+        self._tracker.close()
+
+
+def make_tracker(spec: str, target_id: int = 0, timeout: float = 30.0) -> Tracker:
+    """The tracker a specification names (module docstring). ValueError,
+    naming the specification and the accepted forms, for anything else."""
+    spec = spec.strip()
+    if spec == "gt":
+        return GroundTruthTracker(target_id)
+    kind, _, rest = spec.partition(":")
+    if kind == "opencv" and rest:
+        return OpenCvTracker(rest)
+    if kind == "python" and rest.count(":") == 1 and all(rest.split(":")):
+        module, factory = rest.split(":")
+        return PythonTracker(module, factory)
+    if kind in ("trax", "octave") and rest.strip():
+        return TraxTrackerAdapter(spec, timeout)
+    raise ValueError("tracker specification %r is none of: gt, opencv:NAME, trax:COMMAND LINE, "
+                     "python:MODULE:FACTORY, octave:FILE.m" % (spec,))
