@@ -75,15 +75,11 @@ velocity in the UAV's heading frame: forward, left; m/s), step.
 
 import math
 import os
-import queue
-import re
-import subprocess
-import threading
-import time
 
 import numpy as np
 
 import sim4cv
+from sim4cv.daemon import REPO_ROOT, OwnDaemon
 
 try:  # pragma: no cover - depends on the host
     import gymnasium as _gym
@@ -92,9 +88,7 @@ except ImportError:
     _gym = None
     _spaces = None
 
-REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
 MAPS_DIR = os.path.join(REPO_ROOT, "scenes")
-_LISTENING = re.compile(r"^sim4cvd listening (.*)$")
 
 
 class ActiveTrackingError(RuntimeError):
@@ -154,15 +148,6 @@ _EnvBase = _gym.Env if _gym is not None else object
 # ----------------------------------------------------------------------------- the daemon
 
 
-def daemon_path():
-    """$SIM4CVD, else build/server/daemon/sim4cvd (relative to the working
-    folder if it is there, else to the source tree)."""
-    path = os.environ.get("SIM4CVD", "build/server/daemon/sim4cvd")
-    if not os.path.isabs(path) and not os.path.exists(path):
-        path = os.path.join(REPO_ROOT, path)
-    return os.path.abspath(path)
-
-
 def map_path(name):
     """"easy_desert", "tracking/easy_desert" or a path to a .map file -> the file."""
     if name.endswith(".map"):
@@ -170,62 +155,6 @@ def map_path(name):
     if "/" not in name:
         name = "tracking/" + name
     return os.path.join(MAPS_DIR, name + ".map")
-
-
-class _OwnDaemon:
-    """sim4cvd --tcp-port 0 --mode lockstep [args]; the listening line is read
-    from stdout, which a thread keeps draining (stderr too, keeping a tail)."""
-
-    def __init__(self, args, startup_s=60.0):
-        path = daemon_path()
-        if not os.access(path, os.X_OK):
-            raise ActiveTrackingError("sim4cvd not found or not executable at %s (set SIM4CVD)" % path)
-        self.args = [path, "--tcp-port", "0", "--mode", "lockstep"] + list(args)
-        self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE)
-        self._lines = queue.Queue()
-        self.stderr_tail = []
-        for stream, is_stdout in ((self.proc.stdout, True), (self.proc.stderr, False)):
-            threading.Thread(target=self._drain, args=(stream, is_stdout), daemon=True).start()
-        deadline = time.monotonic() + startup_s
-        while True:
-            try:
-                line = self._lines.get(timeout=max(0.0, deadline - time.monotonic()))
-            except queue.Empty:
-                self.stop()
-                raise ActiveTrackingError("sim4cvd printed no listening line within %.0f s: %s"
-                                          % (startup_s, " ".join(self.args))) from None
-            if line is None:
-                rc = self.proc.wait()
-                time.sleep(0.1)  # let the stderr thread catch up
-                raise ActiveTrackingError("sim4cvd exited with status %s before listening: %s\n%s"
-                                          % (rc, " ".join(self.args), "\n".join(self.stderr_tail[-20:])))
-            match = _LISTENING.match(line)
-            if match:
-                fields = dict(item.split("=", 1) for item in match.group(1).split() if "=" in item)
-                self.address = "tcp://127.0.0.1:%d" % int(fields["tcp"])
-                return
-
-    def _drain(self, stream, is_stdout):
-        for raw in stream:
-            line = raw.decode("utf-8", "replace").rstrip("\n")
-            if is_stdout:
-                self._lines.put(line)
-            else:
-                self.stderr_tail.append(line)
-                del self.stderr_tail[:-200]
-        if is_stdout:
-            self._lines.put(None)
-
-    def stop(self, timeout=20.0):
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(timeout)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        return self.proc.returncode
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -319,7 +248,7 @@ class ActiveTrackingEnv(_EnvBase):
                     args += ["--map", map_path(map)]
                 if car_speed is not None:
                     args += ["--car-speed", repr(float(car_speed))]
-                self.daemon = _OwnDaemon(args + list(daemon_args))
+                self.daemon = OwnDaemon(args + list(daemon_args))  # lockstep
                 address = self.daemon.address
             self.address = address
             self.client = sim4cv.connect(address, name=name, timeout=self.timeout)
