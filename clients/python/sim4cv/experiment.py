@@ -1,0 +1,334 @@
+"""Scripted experiments: a YAML file names a grid of online tracking runs
+(sim4cv.tracking) or an offline OPE study (sim4cv.sequences + sim4cv.ope);
+this runs every combination, resumes, and writes tables, plots and a report.
+
+    python3 -m sim4cv.experiment run FILE.yaml --out DIR [--jobs J] [--daemon ADDRESS]
+
+docs/tracking.md, "Experiments", lists every key with its default. The file
+is checked as a whole (unknown keys, tracker specifications, maps, modes)
+before any run starts. Online: each run is DIR/runs/<name from its
+parameters>/ (session.json, run.s4log, frames_<k>.csv); a run whose
+session.json exists is skipped, any other is redone from scratch. Offline:
+DIR/results/<tracker>/<seq>.txt per tracker and sequence (skipped if present),
+then DIR/ope/. Both end with DIR/results.json, results.csv, plots/ and report.md
+(sim4cv.experiment_report).
+"""
+
+import argparse
+import concurrent.futures
+import json
+import math
+import multiprocessing
+import os
+import re
+import shutil
+import sys
+import time
+
+from .daemon import REPO_ROOT
+
+ONLINE_DEFAULTS = {
+    "kind": "online", "name": "", "maps": ["tracking/easy_urban"], "speeds": [6.0], "trackers": ["gt"],
+    "modes": ["lockstep"], "fps": [30.0], "delays_ms": [0.0], "conditions": [""], "repetitions": 1,
+    "seconds": 60.0, "uavs_per_run": 1, "lost_after_s": 1.0, "min_visibility": 0.1,
+}
+OFFLINE_DEFAULTS = {"kind": "offline", "name": "", "sequences": None, "trackers": ["gt"], "convention": "otb"}
+GENERATION_DEFAULTS = {"maps": ["tracking/easy_urban"], "speeds": [6.0], "frames": 0, "laps": 0, "preset": "",
+                       "conditions": ""}
+LIST_KEYS = ("maps", "speeds", "trackers", "modes", "fps", "delays_ms", "conditions")
+MODES = ("lockstep", "realtime")
+FPS = (15.0, 30.0, 60.0)
+
+
+class ExperimentError(Exception):
+    """A bad experiment file; the message names the key or value."""
+
+
+def _as_list(value):
+    return list(value) if isinstance(value, (list, tuple)) else [value]
+
+
+def _numbers(key, values, lo, hi):
+    try:
+        out = [float(v) for v in values]
+    except (TypeError, ValueError):
+        raise ExperimentError("%s: expected numbers, got %r" % (key, values))
+    bad = [v for v in out if not lo <= v <= hi]
+    if bad:
+        raise ExperimentError("%s: %s outside [%g, %g]" % (key, ", ".join("%g" % v for v in bad), lo, hi))
+    return out
+
+
+def check_tracker_spec(spec):
+    """ExperimentError naming `spec` unless sim4cv.trackers would accept it
+    (without starting it: no process, no import of a python: module)."""
+    from .trackers import _OPENCV
+    if not isinstance(spec, str) or not spec.strip():
+        raise ExperimentError("trackers: %r is not a tracker specification" % (spec,))
+    spec = spec.strip()
+    kind, _, rest = spec.partition(":")
+    if spec == "gt" or (kind == "trax" and rest.strip()):
+        return spec
+    if kind == "opencv" and rest.lower() in _OPENCV:
+        return spec
+    if kind == "opencv":
+        raise ExperimentError("trackers: unknown tracker specification %r (OpenCV trackers: %s)"
+                              % (spec, ", ".join(sorted(_OPENCV))))
+    if kind == "python" and rest.count(":") == 1 and all(rest.split(":")):
+        return spec
+    if kind == "octave" and rest.strip().endswith(".m"):
+        if not os.path.isfile(os.path.abspath(rest.strip())):
+            raise ExperimentError("trackers: %r: no file %s (paths are relative to the working directory)"
+                                  % (spec, os.path.abspath(rest.strip())))
+        return spec
+    raise ExperimentError("trackers: unknown tracker specification %r (forms: gt, opencv:NAME, trax:COMMAND, "
+                          "python:MODULE:FACTORY, octave:FILE.m)" % (spec,))
+
+
+def _check_map(m, key="maps"):
+    if not isinstance(m, str) or not os.path.isfile(os.path.join(REPO_ROOT, "scenes", m + ".map")):
+        raise ExperimentError("%s: no map %r (scenes/%s.map)" % (key, m, m))
+    return m
+
+
+def load(path):
+    """The experiment in `path`, defaults filled in and every value checked."""
+    import yaml
+    try:
+        with open(path) as f:
+            data = yaml.safe_load(f)
+    except (OSError, yaml.YAMLError) as e:
+        raise ExperimentError("%s: %s" % (path, e))
+    if not isinstance(data, dict):
+        raise ExperimentError("%s: expected a mapping of keys (kind: online|offline, ...)" % path)
+    kind = data.get("kind", "online")
+    if kind not in ("online", "offline"):
+        raise ExperimentError("kind: %r is neither online nor offline" % (kind,))
+    defaults = ONLINE_DEFAULTS if kind == "online" else OFFLINE_DEFAULTS
+    unknown = sorted(set(data) - set(defaults))
+    if unknown:
+        raise ExperimentError("unknown key(s) %s for a %s experiment (known: %s)"
+                              % (", ".join(unknown), kind, ", ".join(sorted(defaults))))
+    exp = dict(defaults, **data)
+    exp["name"] = str(exp["name"] or os.path.splitext(os.path.basename(path))[0])
+    exp["trackers"] = [check_tracker_spec(t) for t in _as_list(exp["trackers"])]
+    if not exp["trackers"]:
+        raise ExperimentError("trackers: empty")
+    if len({sanitise(t) for t in exp["trackers"]}) != len(exp["trackers"]):
+        raise ExperimentError("trackers: two specifications with the same name %s" % [sanitise(t) for t in exp["trackers"]])
+    if kind == "offline":
+        return _check_offline(exp)
+    for key in LIST_KEYS:
+        exp[key] = _as_list(exp[key])
+        if not exp[key]:
+            raise ExperimentError("%s: empty" % key)
+    exp["maps"] = [_check_map(m) for m in exp["maps"]]
+    exp["speeds"] = _numbers("speeds", exp["speeds"], 0.1, 40)
+    exp["fps"] = _numbers("fps", exp["fps"], 1, 1000)
+    if any(f not in FPS for f in exp["fps"]):
+        raise ExperimentError("fps: each must be one of 15, 30, 60, got %s" % exp["fps"])
+    exp["delays_ms"] = _numbers("delays_ms", exp["delays_ms"], 0, 60000)
+    bad = [m for m in exp["modes"] if m not in MODES]
+    if bad:
+        raise ExperimentError("modes: unknown %s (choose from lockstep, realtime)" % bad)
+    from .sequences import CONDITIONS
+    exp["conditions"] = ["" if c in (None, "") else str(c) for c in exp["conditions"]]
+    bad = [c for c in exp["conditions"] if c and c not in CONDITIONS]
+    if bad:
+        raise ExperimentError("conditions: unknown %s (choose from %s, or \"\")" % (bad, ", ".join(CONDITIONS)))
+    for key, lo, hi in (("repetitions", 1, 1000), ("uavs_per_run", 1, 16)):
+        if not isinstance(exp[key], int) or not lo <= exp[key] <= hi:
+            raise ExperimentError("%s: expected an integer in [%d, %d], got %r" % (key, lo, hi, exp[key]))
+    for key, lo, hi in (("seconds", 0.1, 36000), ("lost_after_s", 0.0, 3600), ("min_visibility", 0.0, 1.0)):
+        exp[key] = _numbers(key, [exp[key]], lo, hi)[0]
+    return exp
+
+
+def _check_offline(exp):
+    from .ope import CONVENTIONS
+    if exp["convention"] not in CONVENTIONS:
+        raise ExperimentError("convention: %r (choose from %s)" % (exp["convention"], ", ".join(CONVENTIONS)))
+    seqs = exp["sequences"]
+    if isinstance(seqs, str):
+        if not os.path.isdir(seqs):
+            raise ExperimentError("sequences: no folder %s" % os.path.abspath(seqs))
+        return exp
+    if not isinstance(seqs, dict):
+        raise ExperimentError("sequences: give a folder of sequences or a generation spec (maps, speeds, frames)")
+    unknown = sorted(set(seqs) - set(GENERATION_DEFAULTS))
+    if unknown:
+        raise ExperimentError("unknown key(s) sequences.%s (known: %s)"
+                              % (", sequences.".join(unknown), ", ".join(sorted(GENERATION_DEFAULTS))))
+    gen = dict(GENERATION_DEFAULTS, **seqs)
+    if gen["preset"] not in ("", None, "paper"):
+        raise ExperimentError("sequences.preset: %r (only paper)" % gen["preset"])
+    gen["maps"] = [_check_map(m, "sequences.maps") for m in _as_list(gen["maps"])]
+    gen["speeds"] = _numbers("sequences.speeds", _as_list(gen["speeds"]), 0.1, 40)
+    for key in ("frames", "laps"):
+        if not isinstance(gen[key], int) or gen[key] < 0:
+            raise ExperimentError("sequences.%s: expected an integer >= 0, got %r" % (key, gen[key]))
+    if not gen["preset"] and gen["frames"] and gen["laps"]:
+        raise ExperimentError("sequences: give frames or laps, not both")
+    exp["sequences"] = gen
+    return exp
+
+
+def sanitise(text):
+    return re.sub(r"[^A-Za-z0-9.+-]+", "_", str(text)).strip("_")
+
+
+def online_runs(exp):
+    """Every run of an online experiment: dicts with its name, Session
+    keyword arguments and the labels of its records."""
+    n = exp["uavs_per_run"]
+    groups = [exp["trackers"][i:i + n] for i in range(0, len(exp["trackers"]), n)]
+    runs = []
+    for m in exp["maps"]:
+        for speed in exp["speeds"]:
+            for mode in exp["modes"]:
+                for fps in exp["fps"]:
+                    for delay in exp["delays_ms"]:
+                        for cond in exp["conditions"]:
+                            for rep in range(1, exp["repetitions"] + 1):
+                                for group in groups:
+                                    name = "%s_s%g_%s_fps%g_d%g%s_r%d__%s" % (
+                                        sanitise(m.split("/")[-1] if m.startswith("tracking/") else m), speed,
+                                        mode, fps, delay, "_" + cond if cond else "", rep,
+                                        "+".join(sanitise(t) for t in group))
+                                    runs.append({"name": name, "repetition": rep, "session": dict(
+                                        map=m, speed=speed, trackers=group, mode=mode, fps=fps, delay_ms=delay,
+                                        conditions=cond, seconds=exp["seconds"], lost_after_s=exp["lost_after_s"],
+                                        min_visibility=exp["min_visibility"])})
+    return runs
+
+
+def _read_session(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def _run_online(run, out_dir, address):
+    from .tracking import Session, run_session
+    run_dir = os.path.join(out_dir, "runs", run["name"])
+    done = _read_session(os.path.join(run_dir, "session.json"))
+    if done is not None:
+        return run, done, True
+    shutil.rmtree(run_dir, ignore_errors=True)  # an interrupted run is redone from scratch
+    t0 = time.monotonic()
+    summary = run_session(Session(**run["session"]), run_dir, address)
+    summary["wall_s"] = time.monotonic() - t0
+    with open(os.path.join(run_dir, "session.json"), "w") as f:
+        json.dump(summary, f, indent=1)
+    return run, summary, False
+
+
+RECORD_KEYS = ["kind", "run", "map", "speed", "tracker", "mode", "fps", "delay_ms", "conditions", "repetition",
+               "uav", "completion", "frames_processed", "frames_skipped", "tracker_fps", "mean_center_error_px",
+               "median_center_error_px", "mean_distance_m", "seconds", "lost", "error", "wall_s"]
+
+
+def online_records(run, summary):
+    s = run["session"]
+    out = []
+    for k, r in enumerate(summary["results"]):
+        rec = {"kind": "online", "run": run["name"], "map": s["map"], "speed": s["speed"],
+               "tracker": r.get("tracker", s["trackers"][k]), "mode": s["mode"], "fps": s["fps"],
+               "delay_ms": s["delay_ms"], "conditions": s["conditions"], "repetition": run["repetition"],
+               "uav": k, "wall_s": summary.get("wall_s", math.nan)}
+        for key in RECORD_KEYS[11:-1]:
+            rec[key] = r.get(key, "" if key == "error" else math.nan)
+        rec["lost"] = bool(r.get("lost", True))
+        rec["completion"] = r.get("completion", 0.0 if r.get("error") else math.nan)
+        out.append(rec)
+    return out
+
+
+class Progress:
+    """done/total, elapsed and estimated remaining time on stderr."""
+
+    def __init__(self, total, jobs, label):
+        self.total, self.jobs, self.label = total, jobs, label
+        self.done, self.ran, self.ran_s, self.t0 = 0, 0, 0.0, time.monotonic()
+        self.say("%d %s to do, %d at a time" % (total, label, jobs))
+
+    def say(self, text):
+        print("sim4cv.experiment: %s" % text, file=sys.stderr, flush=True)
+
+    def step(self, name, skipped, seconds, note=""):
+        self.done += 1
+        if not skipped:
+            self.ran, self.ran_s = self.ran + 1, self.ran_s + seconds
+        elapsed = time.monotonic() - self.t0
+        left = self.total - self.done
+        eta = "~%.0f s left" % (self.ran_s / self.ran * left / self.jobs) if self.ran and left else \
+            ("done" if not left else "? left")
+        self.say("[%d/%d] %s %s%s; elapsed %.0f s, %s" % (self.done, self.total, name,
+                                                           "skipped (done before)" if skipped else
+                                                           "in %.1f s" % seconds, note, elapsed, eta))
+
+
+def run_online(exp, out_dir, jobs, address=None):
+    runs = online_runs(exp)
+    progress = Progress(len(runs), jobs, "runs")
+    records = []
+    with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:  # each run has its own processes
+        futures = [pool.submit(_run_online, run, out_dir, address) for run in runs]
+        for fut in concurrent.futures.as_completed(futures):
+            run, summary, skipped = fut.result()
+            errors = "; ".join("%s: %s" % (r.get("tracker"), r["error"]) for r in summary["results"] if r.get("error"))
+            progress.step(run["name"], skipped, summary.get("wall_s", 0.0), " (errors: %s)" % errors if errors else "")
+            records += online_records(run, summary)
+    order = {r["name"]: i for i, r in enumerate(runs)}
+    records.sort(key=lambda r: (order[r["run"]], r["uav"]))
+    return records
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="python3 -m sim4cv.experiment",
+                                description="Scripted online/offline tracking experiments; docs/tracking.md, "
+                                            "'Experiments'.")
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run (or resume) an experiment file")
+    r.add_argument("file", help="experiment YAML")
+    r.add_argument("--out", required=True, help="output folder (created; reused to resume)")
+    r.add_argument("--jobs", type=int, default=max(1, (os.cpu_count() or 1) // 2),
+                   help="runs at once, each with its own daemon (default: cores // 2, at least 1)")
+    r.add_argument("--daemon", help="ADDRESS of a running sim4cvd to use (online, --jobs 1, one map/speed/fps/"
+                                    "conditions that match the daemon's; no run logs)")
+    args = p.parse_args(sys.argv[1:] if argv is None else argv)
+    command = "python3 -m sim4cv.experiment " + " ".join(sys.argv[1:] if argv is None else argv)
+    try:
+        exp = load(args.file)
+        if args.jobs < 1:
+            raise ExperimentError("--jobs must be at least 1")
+        if args.daemon and (exp["kind"] != "online" or args.jobs != 1 or
+                            any(len(exp[k]) > 1 for k in ("maps", "speeds", "fps", "conditions"))):
+            raise ExperimentError("--daemon needs an online experiment, --jobs 1 and one map, speed, fps and "
+                                  "conditions (those the daemon was started with)")
+    except ExperimentError as e:
+        print("sim4cv.experiment: error: %s" % e, file=sys.stderr)
+        return 2
+    from . import experiment_report as report
+    t0 = time.monotonic()
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "experiment.json"), "w") as f:
+        json.dump(exp, f, indent=1)
+    if exp["kind"] == "online":
+        records = run_online(exp, args.out, args.jobs, args.daemon)
+        ope_report = None
+    else:
+        from . import experiment_offline
+        records, ope_report = experiment_offline.run_offline(exp, args.out, args.jobs, Progress)
+    wall = time.monotonic() - t0
+    written = report.write_all(exp, records, args.out, command, wall, ope_report)
+    print("sim4cv.experiment: %d records; wrote %s in %.1f s" % (len(records), ", ".join(written), wall),
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    multiprocessing.freeze_support()
+    sys.exit(main())

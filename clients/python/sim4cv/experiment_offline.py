@@ -1,0 +1,152 @@
+"""The offline part of sim4cv.experiment: sequences (a folder, or generated
+into OUT/sequences by sim4cv.sequences), every tracker over every sequence's
+img/*.jpg (initialised on the first frame's ground truth), results in the
+groundtruth_rect format, then sim4cv.ope.
+
+    OUT/results/<tracker>/<seq>.txt        x,y,w,h per frame (line 1: the initial box); NaN,NaN,NaN,NaN: no box
+    OUT/results/<tracker>/<seq>_time.txt   seconds per frame of the tracker (got10k's format; line 1: init)
+    OUT/ope/ope.json + PNGs                sim4cv.ope's report and plots
+
+`gt` offline answers each frame with the sequence's ground-truth line (the
+reference: AUC and precision at their best). A result file is written last,
+by renaming, so one that exists is complete and is skipped on resume.
+"""
+
+import concurrent.futures
+import glob
+import math
+import multiprocessing
+import os
+import time
+
+import numpy as np
+
+
+def sequences_dir(exp, out_dir, jobs, say):
+    """The folder of sequences: the given one, or generated into OUT/sequences."""
+    seqs = exp["sequences"]
+    if isinstance(seqs, str):
+        return seqs
+    from . import sequences as sq
+    cond = seqs["conditions"] or None
+    if seqs["preset"] == "paper":
+        specs = sq.paper_specs(cond)
+    else:
+        frames, laps = (seqs["frames"], 0) if seqs["frames"] else (0, seqs["laps"] or 1)
+        specs = [sq.Spec(m, s, frames=frames, laps=laps, conditions=cond) for m in seqs["maps"]
+                 for s in seqs["speeds"]]
+    root = os.path.join(out_dir, "sequences")
+    say("generating %d sequence(s) into %s (complete ones are kept)" % (len(specs), root))
+    sq.generate(specs, root, jobs=min(jobs, len(specs)), log=say)
+    return root
+
+
+def list_sequences(root):
+    return sorted(d for d in os.listdir(root) if os.path.isfile(os.path.join(root, d, "groundtruth_rect.txt")))
+
+
+def _fmt(box):
+    if box is None or any(not math.isfinite(v) for v in box):
+        return "NaN,NaN,NaN,NaN"
+    return ",".join("%.2f" % v for v in box)
+
+
+def track_sequence(spec, seq_dir, result_path):
+    """Runs `spec` over one sequence; writes the result and time files.
+    Returns (frames, tracker seconds, error text)."""
+    import cv2
+    from .ope import read_boxes
+    from .trackers import make_tracker
+    truth = read_boxes(os.path.join(seq_dir, "groundtruth_rect.txt"))
+    images = sorted(glob.glob(os.path.join(seq_dir, "img", "*.jpg")))
+    if not images:
+        return 0, 0.0, "no img/*.jpg in %s" % seq_dir
+    if len(truth) == 0 or not np.all(np.isfinite(truth[0])):
+        return 0, 0.0, "%s: the first frame has no ground-truth box to start from" % seq_dir
+    boxes, times = [tuple(truth[0])], [0.0]
+    tracker = None if spec == "gt" else make_tracker(spec)
+    try:
+        for i, path in enumerate(images):
+            rgb = cv2.cvtColor(cv2.imread(path, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+            t0 = time.perf_counter()
+            if i == 0:
+                if tracker is not None:
+                    tracker.init(rgb, tuple(float(v) for v in truth[0]))
+            elif tracker is None:
+                boxes.append(tuple(truth[i]) if i < len(truth) else None)
+            else:
+                boxes.append(tracker.update(rgb))
+            if i == 0:
+                times[0] = time.perf_counter() - t0
+            else:
+                times.append(time.perf_counter() - t0)
+    finally:
+        if tracker is not None:
+            tracker.close()
+    os.makedirs(os.path.dirname(result_path), exist_ok=True)
+    with open(result_path[:-4] + "_time.txt", "w") as f:
+        f.write("".join("%.6f\n" % t for t in times))
+    with open(result_path + ".part", "w") as f:
+        f.write("".join(_fmt(b) + "\n" for b in boxes))
+    os.replace(result_path + ".part", result_path)
+    return len(images), sum(times[1:]), ""
+
+
+def _job(args):
+    spec, tracker_name, seq, seq_dir, result_path = args
+    t0 = time.monotonic()
+    if os.path.exists(result_path):
+        frames, seconds = _read_times(result_path)
+        return spec, tracker_name, seq, frames, seconds, "", True, 0.0
+    try:
+        frames, seconds, error = track_sequence(spec, seq_dir, result_path)
+    except Exception as e:  # one tracker's failure on one sequence is a record, not the end of the study
+        frames, seconds, error = 0, 0.0, "%s: %s" % (type(e).__name__, e)
+    return spec, tracker_name, seq, frames, seconds, error, False, time.monotonic() - t0
+
+
+def _read_times(result_path):
+    try:
+        with open(result_path[:-4] + "_time.txt") as f:
+            times = [float(line) for line in f if line.strip()]
+        return len(times), sum(times[1:])
+    except (OSError, ValueError):
+        return 0, math.nan
+
+
+def run_offline(exp, out_dir, jobs, progress_class):
+    from . import ope
+    from .experiment import sanitise
+    say = lambda text: print("sim4cv.experiment: %s" % text, file=__import__("sys").stderr, flush=True)  # noqa: E731
+    root = sequences_dir(exp, out_dir, jobs, say)
+    seqs = list_sequences(root)
+    if not seqs:
+        raise SystemExit("sim4cv.experiment: error: no sequences (folders with groundtruth_rect.txt) in %s" % root)
+    results_dir = os.path.join(out_dir, "results")
+    work = [(spec, sanitise(spec), seq, os.path.join(root, seq), os.path.join(results_dir, sanitise(spec), seq + ".txt"))
+            for spec in exp["trackers"] for seq in seqs]
+    progress = progress_class(len(work), jobs, "(tracker, sequence) pairs")
+    records = []
+    context = multiprocessing.get_context("spawn")
+    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+        for spec, name, seq, frames, seconds, error, skipped, wall in pool.map(_job, work):
+            progress.step("%s on %s" % (spec, seq), skipped, wall, " (error: %s)" % error if error else "")
+            records.append({"kind": "offline", "tracker": spec, "tracker_dir": name, "sequence": seq,
+                            "frames": frames, "tracker_fps": (frames - 1) / seconds if seconds and frames > 1
+                            else math.nan, "error": error})
+    ope_dir = os.path.join(out_dir, "ope")
+    os.makedirs(ope_dir, exist_ok=True)
+    names = [sanitise(t) for t in exp["trackers"] if os.path.isdir(os.path.join(results_dir, sanitise(t)))]
+    report = ope.evaluate(root, results_dir, exp["convention"], trackers=names)
+    try:
+        from . import ope_plots
+        report["plots"] = [os.path.basename(p) for p in ope_plots.plot_report(report, ope_dir)]
+    except ImportError as e:
+        report["plots"] = []
+        report["warnings"].append("plots skipped: %s" % e)
+    import json
+    with open(os.path.join(ope_dir, "ope.json"), "w") as f:
+        json.dump(report, f, indent=1, allow_nan=False)
+    for w in report["warnings"]:
+        say("ope warning: %s" % w)
+    return records, report
