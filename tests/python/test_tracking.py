@@ -61,3 +61,9 @@ def test_a_trax_tracker_flies_a_uav(tmp_path):
     (ncc,) = run(tmp_path, map="tracking/easy_urban", speed=4, trackers=["trax:/usr/bin/python3 " + NCC], seconds=6)
     assert ncc["error"] == "", ncc
     assert ncc["frames_processed"] > 100 and ncc["mean_center_error_px"] < 15, ncc
+
+
+def test_a_walking_pedestrian_can_be_the_target(tmp_path):
+    (gt,) = run(tmp_path, map="tracking/easy_urban", speed=2, target="pedestrian", trackers=["gt"], seconds=6)
+    assert gt["error"] == "" and not gt["lost"] and gt["completion"] == 1.0
+    assert 8 < gt["covered_m"] < 14  # 2 m/s for about 6 s

@@ -54,6 +54,7 @@ class Session:
     fps: float = 30.0                   # camera frame rate: 15, 30 or 60
     delay_ms: float = 0.0               # added to every tracker answer
     seconds: float = 60.0               # sim time the session lasts
+    target: str = "car"                 # or "pedestrian": a walker on the car's route at `speed` (car removed)
     lost_after_s: float = 1.0           # the target unseen this long: lost
     min_visibility: float = 0.1         # a box with less visibility counts as unseen
     conditions: str = ""                # a weather/time-of-day preset (docs/protocol.md); "": the daemon's
@@ -70,19 +71,36 @@ class Session:
         return args
 
 
-def _world_ids(client):
+def _world_ids(client, needed=("car", "uav")):
     world = client.get_world()
     ids = {e.name: e.id for e in world.entities}
-    if "car" not in ids or "uav" not in ids:
-        raise ValueError("the world has no 'car' and 'uav' to track with (entities: %s)" % ", ".join(ids))
+    if any(name not in ids for name in needed):
+        raise ValueError("the world has no %s to track with (entities: %s)"
+                         % (" and ".join("'%s'" % n for n in needed), ", ".join(ids)))
     return world, ids
 
 
-def _add_uavs(client, count: int) -> List[tuple]:
+def _target(client, session: Session) -> int:
+    """The target's id: the map's car, or a walker that replaces it on its route."""
+    world, ids = _world_ids(client)
+    if session.target == "car":
+        return ids["car"]
+    if session.target != "pedestrian":
+        raise ValueError("Session.target is 'car' or 'pedestrian', not %r" % (session.target,))
+    if not world.routes:
+        raise ValueError("the world has no route for a pedestrian to walk")
+    walker = client.spawn("pedestrian", "walker", 0, 0, 0)
+    client.set_route(walker, world.routes[0], min(session.speed, 10.0))
+    client.remove(ids["car"])
+    client.uav_follow(ids["uav"], walker)
+    return walker
+
+
+def _add_uavs(client, count: int, target: int) -> List[tuple]:
     """(uav id, camera) for `count` UAVs: the scene's, then new ones beside
     it, each following the target (1.5 m higher than the one before, so no two
     share a station) until its tracker starts."""
-    world, ids = _world_ids(client)
+    world, ids = _world_ids(client, ("uav",))
     uavs = [(ids["uav"], "uav")]
     state = client.get_state()
     first = next(e for e in state.entities if e.id == ids["uav"])
@@ -91,7 +109,7 @@ def _add_uavs(client, count: int) -> List[tuple]:
         uav = client.spawn("uav", name, first.position.x + 3.0 * k, first.position.y + 3.0 * k,
                            first.position.z + EXTRA_UAV_CLIMB_M * k)
         client.add_camera(name + "_cam", mounted_on=name, pitch_down_deg=60.0, gimbal=True)
-        client.uav_follow(uav, ids["car"], altitude=15.0 + EXTRA_UAV_CLIMB_M * k)
+        client.uav_follow(uav, target, altitude=15.0 + EXTRA_UAV_CLIMB_M * k)
         uavs.append((uav, name + "_cam"))
     return uavs
 
@@ -242,11 +260,11 @@ def run_session(session: Session, out_dir: str, address: Optional[str] = None) -
     try:
         from . import connect
         with connect(address, name="session") as control:
-            _, ids = _world_ids(control)
-            uavs = _add_uavs(control, len(session.trackers))
+            target = _target(control, session)
+            uavs = _add_uavs(control, len(session.trackers), target)
             barrier = context.Barrier(len(uavs) + 1)
             results = context.Queue()
-            workers = [context.Process(target=_worker, args=(address, camera, uav, ids["car"], spec, asdict(session),
+            workers = [context.Process(target=_worker, args=(address, camera, uav, target, spec, asdict(session),
                                                             barrier, os.path.join(out_dir, "frames_%d.csv" % k),
                                                             results))
                        for k, ((uav, camera), spec) in enumerate(zip(uavs, session.trackers))]
