@@ -30,7 +30,7 @@ from .daemon import REPO_ROOT
 ONLINE_DEFAULTS = {
     "kind": "online", "name": "", "maps": ["tracking/easy_urban"], "speeds": [6.0], "trackers": ["gt"],
     "modes": ["lockstep"], "fps": [30.0], "delays_ms": [0.0], "conditions": [""], "repetitions": 1,
-    "seconds": 60.0, "uavs_per_run": 1, "lost_after_s": 1.0, "min_visibility": 0.1,
+    "seconds": 60.0, "uavs_per_run": 1, "target": "car", "lost_after_s": 1.0, "min_visibility": 0.1,
 }
 OFFLINE_DEFAULTS = {"kind": "offline", "name": "", "sequences": None, "trackers": ["gt"], "convention": "otb"}
 GENERATION_DEFAULTS = {"maps": ["tracking/easy_urban"], "speeds": [6.0], "frames": 0, "laps": 0, "preset": "",
@@ -115,7 +115,8 @@ def load(path):
     if not exp["trackers"]:
         raise ExperimentError("trackers: empty")
     if len({sanitise(t) for t in exp["trackers"]}) != len(exp["trackers"]):
-        raise ExperimentError("trackers: two specifications with the same name %s" % [sanitise(t) for t in exp["trackers"]])
+        raise ExperimentError("trackers: two specifications with the same folder name: %s"
+                              % [sanitise(t) for t in exp["trackers"]])
     if kind == "offline":
         return _check_offline(exp)
     for key in LIST_KEYS:
@@ -139,6 +140,8 @@ def load(path):
     for key, lo, hi in (("repetitions", 1, 1000), ("uavs_per_run", 1, 16)):
         if not isinstance(exp[key], int) or not lo <= exp[key] <= hi:
             raise ExperimentError("%s: expected an integer in [%d, %d], got %r" % (key, lo, hi, exp[key]))
+    if exp["target"] not in ("car", "pedestrian"):
+        raise ExperimentError("target: %r (car or pedestrian)" % (exp["target"],))
     for key, lo, hi in (("seconds", 0.1, 36000), ("lost_after_s", 0.0, 3600), ("min_visibility", 0.0, 1.0)):
         exp[key] = _numbers(key, [exp[key]], lo, hi)[0]
     return exp
@@ -197,8 +200,8 @@ def online_runs(exp):
                                         "+".join(sanitise(t) for t in group))
                                     runs.append({"name": name, "repetition": rep, "session": dict(
                                         map=m, speed=speed, trackers=group, mode=mode, fps=fps, delay_ms=delay,
-                                        conditions=cond, seconds=exp["seconds"], lost_after_s=exp["lost_after_s"],
-                                        min_visibility=exp["min_visibility"])})
+                                        conditions=cond, seconds=exp["seconds"], target=exp["target"],
+                                        lost_after_s=exp["lost_after_s"], min_visibility=exp["min_visibility"])})
     return runs
 
 
@@ -218,7 +221,12 @@ def _run_online(run, out_dir, address):
         return run, done, True
     shutil.rmtree(run_dir, ignore_errors=True)  # an interrupted run is redone from scratch
     t0 = time.monotonic()
-    summary = run_session(Session(**run["session"]), run_dir, address)
+    try:
+        summary = run_session(Session(**run["session"]), run_dir, address)
+    except Exception as e:  # e.g. the daemon did not start: recorded, not saved (a resume retries it)
+        error = "run failed: %s: %s" % (type(e).__name__, e)
+        return run, {"results": [{"tracker": t, "lost": True, "error": error} for t in run["session"]["trackers"]],
+                     "wall_s": time.monotonic() - t0}, False
     summary["wall_s"] = time.monotonic() - t0
     with open(os.path.join(run_dir, "session.json"), "w") as f:
         json.dump(summary, f, indent=1)

@@ -123,8 +123,8 @@ def run_offline(exp, out_dir, jobs, progress_class):
     if not seqs:
         raise SystemExit("sim4cv.experiment: error: no sequences (folders with groundtruth_rect.txt) in %s" % root)
     results_dir = os.path.join(out_dir, "results")
-    work = [(spec, sanitise(spec), seq, os.path.join(root, seq), os.path.join(results_dir, sanitise(spec), seq + ".txt"))
-            for spec in exp["trackers"] for seq in seqs]
+    work = [(spec, sanitise(spec), seq, os.path.join(root, seq),
+             os.path.join(results_dir, sanitise(spec), seq + ".txt")) for spec in exp["trackers"] for seq in seqs]
     progress = progress_class(len(work), jobs, "(tracker, sequence) pairs")
     records = []
     context = multiprocessing.get_context("spawn")
