@@ -78,6 +78,8 @@ def test_smoke_online_and_resume(tmp_path):
             assert key in r, key
         assert r["map"] == "tracking/easy_urban" and r["speed"] == 8 and r["mode"] == "lockstep"
         assert r["error"] == "" and r["frames_processed"] > 200 and r["completion"] > 0.5
+    deviation = {r["tracker"]: r["deviation_from_gt_m"] for r in records}
+    assert deviation["gt"] == 0.0 and deviation["opencv:kcf"] >= 0.0, deviation  # the gt run is the reference
     with open(out / "results.csv") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == 2 and "completion" in rows[0]

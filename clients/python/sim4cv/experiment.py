@@ -15,7 +15,9 @@ then DIR/ope/. Both end with DIR/results.json, results.csv, plots/ and report.md
 """
 
 import argparse
+import bisect
 import concurrent.futures
+import csv
 import json
 import math
 import multiprocessing
@@ -291,7 +293,54 @@ def run_online(exp, out_dir, jobs, address=None):
             records += online_records(run, summary)
     order = {r["name"]: i for i, r in enumerate(runs)}
     records.sort(key=lambda r: (order[r["run"]], r["uav"]))
+    add_gt_deviation(records, out_dir)
     return records
+
+
+def _uav_track(out_dir, record):
+    """(sim times, x, y) of a record's UAV from its run's frames CSV."""
+    path = os.path.join(out_dir, "runs", record["run"], "frames_%d.csv" % record["uav"])
+    times, xs, ys = [], [], []
+    if os.path.exists(path):
+        with open(path) as f:
+            for row in csv.DictReader(f):
+                times.append(float(row["sim_time"]))
+                xs.append(float(row["uav_x"]))
+                ys.append(float(row["uav_y"]))
+    return times, xs, ys
+
+
+def add_gt_deviation(records, out_dir):
+    """deviation_from_gt_m: the mean distance between a UAV and the
+    ground-truth tracker's UAV at the same sim time (the gt run of the same
+    map, speed, mode, fps, conditions and repetition; one with the same
+    delay if there is one), over the frames the tracker flew; NaN without a
+    gt run."""
+    setting = ("map", "speed", "mode", "fps", "conditions", "repetition")
+    references = {}
+    for r in records:
+        if r["tracker"] == "gt":
+            key = tuple(r[k] for k in setting)
+            if key not in references or r["delay_ms"] == 0:
+                references[key] = r
+    tracks = {}
+    for r in records:
+        ref = references.get(tuple(r[k] for k in setting))
+        r["deviation_from_gt_m"] = math.nan
+        if ref is None:
+            continue
+        for rec in (r, ref):
+            if id(rec) not in tracks:
+                tracks[id(rec)] = _uav_track(out_dir, rec)
+        gt_t, gt_x, gt_y = tracks[id(ref)]
+        t, x, y = tracks[id(r)]
+        distances = []
+        for ti, xi, yi in zip(t, x, y):
+            j = min(bisect.bisect_left(gt_t, ti), len(gt_t) - 1) if gt_t else -1
+            if j >= 0 and abs(gt_t[j] - ti) < 0.1:
+                distances.append(math.hypot(xi - gt_x[j], yi - gt_y[j]))
+        if distances:
+            r["deviation_from_gt_m"] = sum(distances) / len(distances)
 
 
 def main(argv=None):

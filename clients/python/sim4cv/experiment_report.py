@@ -173,7 +173,7 @@ def trajectory_maps(records, out_dir, plots_dir):
 
 
 ONLINE_COLUMNS = ["map", "speed", "tracker", "mode", "fps", "delay_ms", "runs", "completion", "lost",
-                  "frames_processed", "frames_skipped", "tracker_fps", "mean_center_error_px"]
+                  "frames_processed", "frames_skipped", "tracker_fps", "mean_center_error_px", "deviation_from_gt_m"]
 
 
 def summary_rows(records):
@@ -190,8 +190,9 @@ def summary_rows(records):
         row = dict(zip(["map", "speed", "tracker", "mode", "fps", "delay_ms", "conditions"], k))
         row["runs"] = len(recs)
         row["lost"] = "%d/%d" % (sum(bool(r["lost"]) for r in recs), len(recs))
-        for key in ("completion", "frames_processed", "frames_skipped", "tracker_fps", "mean_center_error_px"):
-            row[key] = _mean([r[key] for r in recs])
+        for key in ("completion", "frames_processed", "frames_skipped", "tracker_fps", "mean_center_error_px",
+                    "deviation_from_gt_m"):
+            row[key] = _mean([r.get(key, math.nan) for r in recs])
         row["errors"] = "; ".join(sorted({r["error"] for r in recs if r["error"]}))
         rows.append(row)
     return rows
@@ -205,7 +206,7 @@ def _md_table(columns, rows, formats=None):
     return out
 
 
-FORMATS = {"frames_processed": "%.0f", "frames_skipped": "%.0f", "tracker_fps": "%.0f", "mean_center_error_px": "%.1f",
+FORMATS = {"deviation_from_gt_m": "%.1f", "frames_processed": "%.0f", "frames_skipped": "%.0f", "tracker_fps": "%.0f", "mean_center_error_px": "%.1f",
            "speed": "%g", "fps": "%g", "delay_ms": "%g"}
 
 
