@@ -150,6 +150,9 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
     case Kind::kRemoveCamera:
       RemoveCamera(request.remove_camera().name(), change);
       break;
+    case Kind::kSetCameraPose:
+      SetCameraPose(request.set_camera_pose());
+      break;
     case Kind::kQueryRoad:
       QueryRoad(request.query_road(), *answer.mutable_road());
       change.world_changed = false;
@@ -397,6 +400,23 @@ void Simulation::AddCamera(const proto::AddCamera& camera) {
   }
   cameras_.push_back(std::move(spec));
   camera_added_ = true;
+}
+
+void Simulation::SetCameraPose(const proto::SetCameraPose& pose) {
+  const int index = FindCamera(pose.camera());
+  if (index < 0) {
+    throw ConfigureError(proto::ERROR_CODE_UNKNOWN_CAMERA,
+                         "SetCameraPose.camera: no camera is named '" + pose.camera() + "'");
+  }
+  sim::CameraSpec& camera = cameras_[static_cast<std::size_t>(index)];
+  if (!camera.mounted_on.empty()) {
+    throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "SetCameraPose moves cameras fixed in the world; '" +
+                                                                 camera.name + "' is mounted on '" + camera.mounted_on +
+                                                                 "' (add one without mounted_on)");
+  }
+  camera.offset = {pose.position().x(), pose.position().y(), pose.position().z()};
+  camera.yaw_deg = static_cast<float>(pose.yaw_deg());
+  camera.pitch_down_deg = static_cast<float>(pose.pitch_down_deg());
 }
 
 void Simulation::RemoveCamera(const std::string& name, Change& change) {

@@ -91,6 +91,8 @@ class Simulation {
   // The names of the cameras mounted on `entity`, for messages.
   std::string CamerasOn(const std::string& entity) const;
   void AddCamera(const proto::AddCamera& camera);
+  // Moves a world-fixed camera; mounted ones are refused.
+  void SetCameraPose(const proto::SetCameraPose& pose);
   void RemoveCamera(const std::string& name, Change& change);
   void RemoveEntity(uint32_t id, Change& change);
   void LoadMap(const proto::LoadMap& load, Change& change);

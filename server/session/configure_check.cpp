@@ -5,9 +5,9 @@
 #include <type_traits>
 
 #include "protocol/conditions.h"
-#include "server/session/effects_wire.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
+#include "server/session/effects_wire.h"
 #include "server/session/entity_kinds_wire.h"
 
 namespace sim4cv::session {
@@ -175,6 +175,16 @@ std::string CheckAddCamera(const proto::AddCamera& camera) {
       .problem();
 }
 
+std::string CheckSetCameraPose(const proto::SetCameraPose& pose) {
+  return Checker()
+      .Name("SetCameraPose.camera", pose.camera(), false)
+      .Vec("SetCameraPose.position", pose.position())
+      .Range("SetCameraPose.position.z", pose.position().z(), 0.05, 1e4)
+      .Finite("SetCameraPose.yaw_deg", pose.yaw_deg())
+      .Range("SetCameraPose.pitch_down_deg", pose.pitch_down_deg(), -90, 90)
+      .problem();
+}
+
 std::string CheckQueryRoad(const proto::QueryRoad& query) {
   Checker check;
   check.Vec("QueryRoad.point", query.point()).Finite("QueryRoad.heading_deg", query.heading_deg());
@@ -189,8 +199,10 @@ std::string CheckSetConditions(const proto::SetConditions& request) {
     return "SetConditions.preset " + Quoted(request.preset()) + " is not a preset; use one of " + conditions::Names();
   });
   if (request.has_hour()) check.Range("SetConditions.hour", request.hour(), conditions::kMinHour, conditions::kMaxHour);
-  if (request.has_noise_read()) check.Range("SetConditions.noise_read", request.noise_read(), 0, conditions::kMaxNoiseRead);
-  if (request.has_noise_shot()) check.Range("SetConditions.noise_shot", request.noise_shot(), 0, conditions::kMaxNoiseShot);
+  if (request.has_noise_read())
+    check.Range("SetConditions.noise_read", request.noise_read(), 0, conditions::kMaxNoiseRead);
+  if (request.has_noise_shot())
+    check.Range("SetConditions.noise_shot", request.noise_shot(), 0, conditions::kMaxNoiseShot);
   check.True(request.quality().empty() || conditions::FindQuality(request.quality()).has_value(), [&] {
     return "SetConditions.quality " + Quoted(request.quality()) + " is not a quality; use \"full\" or \"fast\"";
   });
@@ -226,6 +238,8 @@ std::string CheckConfigure(const proto::Configure& request) {
       return CheckAddCamera(request.add_camera());
     case Kind::kRemoveCamera:
       return Checker().Name("RemoveCamera.name", request.remove_camera().name(), false).problem();
+    case Kind::kSetCameraPose:
+      return CheckSetCameraPose(request.set_camera_pose());
     case Kind::kQueryRoad:
       return CheckQueryRoad(request.query_road());
     case Kind::kSetConditions:

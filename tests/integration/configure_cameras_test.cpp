@@ -54,7 +54,8 @@ TEST_F(CamerasTest, CameraOnASpawnedUavDeliversFramesOfItsSize) {
 
 TEST_F(CamerasTest, WorldFixedCameraWatchesTheCarDriveThrough) {
   // 30 m above the car's start, looking straight down: about 46 x 35 m of road.
-  client_->AddCamera({.name = "road_cam", .width = 160, .height = 120, .pitch_down_deg = 90, .x = -40, .y = -42, .z = 30});
+  client_->AddCamera(
+      {.name = "road_cam", .width = 160, .height = 120, .pitch_down_deg = 90, .x = -40, .y = -42, .z = 30});
   client_->Subscribe("road_cam", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
   int frames_with_car = 0;
   bool first_has_car = false, last_has_car = true;
@@ -69,6 +70,32 @@ TEST_F(CamerasTest, WorldFixedCameraWatchesTheCarDriveThrough) {
   EXPECT_TRUE(first_has_car) << "the car starts right below the camera";
   EXPECT_FALSE(last_has_car) << "the camera stays where it is while the car drives away";
   EXPECT_GT(frames_with_car, 30);
+}
+
+// A dataset generator moves one world-fixed camera from view to view.
+TEST_F(CamerasTest, SetCameraPoseMovesAWorldFixedCameraFromTheNextFrameOn) {
+  client_->AddCamera(
+      {.name = "road_cam", .width = 160, .height = 120, .pitch_down_deg = 90, .x = -40, .y = -42, .z = 30});
+  client_->Subscribe("road_cam", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
+  EXPECT_LT(Distance(client_->StepAndReceive().camera_pose().position(), Vec(-40, -42, 30)), 1e-3);
+  client_->SetCameraPose("road_cam", 10, 20, 2, 45, 5);
+  const proto::Frame& moved = client_->StepAndReceive();
+  EXPECT_LT(Distance(moved.camera_pose().position(), Vec(10, 20, 2)), 1e-3);
+  try {
+    client_->SetCameraPose("uav", 0, 0, 10, 0);
+    FAIL() << "a mounted camera was moved";
+  } catch (const ServerError& e) {
+    EXPECT_EQ(e.code(), proto::ERROR_CODE_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(e.what()).find("SetCameraPose moves cameras fixed in the world; 'uav' is mounted on 'uav'"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    client_->SetCameraPose("nowhere", 0, 0, 10, 0);
+    FAIL() << "an unknown camera was moved";
+  } catch (const ServerError& e) {
+    EXPECT_EQ(e.code(), proto::ERROR_CODE_UNKNOWN_CAMERA);
+  }
 }
 
 TEST_F(CamerasTest, RemovedCameraSendsItsSubscribersAnError) {
@@ -115,8 +142,14 @@ TEST_F(CamerasTest, RemovedCameraSendsItsSubscribersAnError) {
 TEST_F(CamerasTest, StereoPairOnOneUavSeesTheCarWithDisparity) {
   // Two cameras 0.5 m apart across the scene UAV, which films the car.
   for (const auto& [name, y] : {std::pair{"left", 0.25}, std::pair{"right", -0.25}}) {
-    client_->AddCamera({.name = name, .mounted_on = "uav", .width = 160, .height = 120, .pitch_down_deg = 60,
-                        .gimbal = true, .y = y, .z = -0.3});
+    client_->AddCamera({.name = name,
+                        .mounted_on = "uav",
+                        .width = 160,
+                        .height = 120,
+                        .pitch_down_deg = 60,
+                        .gimbal = true,
+                        .y = y,
+                        .z = -0.3});
   }
   auto right = Connect("right");
   client_->Subscribe("left", {proto::CHANNEL_RGB, proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);

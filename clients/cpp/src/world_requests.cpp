@@ -55,6 +55,19 @@ proto::WorldInfo Client::UavTrack(uint32_t uav_id, const std::string& camera, do
   return ConfigureWorld(detail::UavTrackRequest(uav_id, camera, distance, altitude));
 }
 
+proto::WorldInfo Client::SetCameraPose(const std::string& camera, double x, double y, double z, double yaw_deg,
+                                       double pitch_down_deg) {
+  proto::Configure request;
+  proto::SetCameraPose& pose = *request.mutable_set_camera_pose();
+  pose.set_camera(camera);
+  pose.mutable_position()->set_x(x);
+  pose.mutable_position()->set_y(y);
+  pose.mutable_position()->set_z(z);
+  pose.set_yaw_deg(yaw_deg);
+  pose.set_pitch_down_deg(pitch_down_deg);
+  return ConfigureWorld(std::move(request));
+}
+
 proto::WorldInfo Client::AddCamera(const CameraSetup& camera) {
   return ConfigureWorld(detail::AddCameraRequest(camera));
 }

@@ -127,6 +127,14 @@ class WorldRequests:
                               offset=pb.Vec3(x=x, y=y, z=z))
         return self._configure_world(add_camera=camera)
 
+    def set_camera_pose(self, camera, x, y, z, yaw_deg, pitch_down_deg=0.0):
+        """Moves a camera fixed in the world (add_camera without mounted_on)
+        from the next frame on: position (m), heading (degrees from east,
+        counter-clockwise), pitch below the horizon (degrees)."""
+        pose = pb.SetCameraPose(camera=camera, position=pb.Vec3(x=x, y=y, z=z), yaw_deg=yaw_deg,
+                                pitch_down_deg=pitch_down_deg)
+        return self._configure_world(set_camera_pose=pose)
+
     def remove_camera(self, name):
         """Removes a camera add_camera() added; its subscribers get an
         UNKNOWN_CAMERA Error."""

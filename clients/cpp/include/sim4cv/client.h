@@ -205,6 +205,11 @@ class Client {
   // docs/tracking.md, "The servo".
   proto::WorldInfo UavTrack(uint32_t uav_id, const std::string& camera, double distance = 0, double altitude = 0);
   proto::WorldInfo AddCamera(const CameraSetup& camera);
+  // Moves a camera fixed in the world (AddCamera without mounted_on) from
+  // the next frame on: position (m), heading (degrees from east,
+  // counter-clockwise) and pitch below the horizon.
+  proto::WorldInfo SetCameraPose(const std::string& camera, double x, double y, double z, double yaw_deg,
+                                 double pitch_down_deg = 0);
   // Removes a camera AddCamera added; its subscribers get an UNKNOWN_CAMERA Error.
   proto::WorldInfo RemoveCamera(const std::string& name);
   // Back to the loaded map's start: time 0, spawned entities and added cameras gone.
