@@ -1,0 +1,416 @@
+"""The driving case study's labelled dataset (docs/driving.md, "Dataset").
+
+    python3 -m sim4cv.driving_dataset generate --maps train --surroundings desert,urban --out DIR \
+        [--views random|fixed|none] [--random-views N] [--straight-step 0.8] [--turn-step 0.2] \
+        [--max-samples N] [--seed S]
+
+For each map a lockstep sim4cvd of its own (--map, no traffic) renders a
+world-fixed camera "dataset_cam" (320x180, fov 60, 8 degrees down, 1.5 m
+up: the car's first-person view; the map's car and UAV are removed) placed
+on the right-lane centre of every route of the map, tangent to it, and at
+augmented views around it; the labels are the lane points 2, 4, 6, 8 m
+ahead of the lane pose, encoded for each view (sim4cv.driving_labels).
+"""
+
+import argparse
+import csv
+import glob
+import json
+import math
+import os
+import shutil
+import sys
+import tempfile
+import time
+import zlib
+from typing import Optional, Sequence, Tuple
+
+import numpy as np
+
+from . import driving_labels as dl
+
+CAMERA = "dataset_cam"
+CAMERA_SETTINGS = {"width": 320, "height": 180, "fov_y_deg": 60.0, "pitch_down_deg": 8.0, "height_m": 1.5}
+WAYPOINT_STEP_M = 2.0
+WAYPOINT_COUNT = 4
+TURN_LOOKAHEAD_M = 2.0
+TURN_THRESHOLD_DEG = 3.0
+LANE_OFFSET_M = 2.0  # lane centre to the right of the road centre line (docs/maps.md)
+EVAL_STEP_M = 2.0    # default step of the val and test sets
+SETS = ("train", "val", "test")
+FORMAT_VERSION = 1
+COLUMNS = (["image", "map", "surroundings", "route", "sample", "view_x", "view_y", "view_yaw_deg",
+            "offset_side_m", "offset_yaw_deg"]
+           + ["%s%d" % (k, i) for i in range(1, WAYPOINT_COUNT + 1) for k in ("v", "h")] + ["goal"])
+
+
+class DatasetError(RuntimeError):
+    """A dataset cannot be generated into DIR; nothing was overwritten."""
+
+
+# ---------------------------------------------------------------------------
+# Maps and the exact lane geometry of their routes (docs/maps.md)
+
+_NORMALS = {"N": (0.0, 1.0), "S": (0.0, -1.0), "E": (1.0, 0.0), "W": (-1.0, 0.0)}
+
+
+def parse_map(path: str) -> dict:
+    """name, surroundings, tile_size, grid (W, H) and routes {name: (closed, [(col, row), ...])}."""
+    info = {"name": None, "surroundings": "", "tile_size": None, "grid": None, "routes": {}}
+    current = None
+    with open(path) as f:
+        for raw in f:
+            words = raw.split("#", 1)[0].split() if not raw.startswith("#") else []
+            if not words:
+                continue
+            key = words[0]
+            if key == "name":
+                info["name"] = words[1]
+            elif key == "surroundings":
+                info["surroundings"] = words[1]
+            elif key == "tile_size":
+                info["tile_size"] = float(words[1])
+            elif key == "grid":
+                info["grid"] = (int(words[1]), int(words[2]))
+            elif key == "route":
+                current = words[1]
+                info["routes"][current] = (words[2] == "closed", [])
+            elif key == "tiles" and current is not None:
+                info["routes"][current][1].extend(tuple(int(v) for v in w.split(",")) for w in words[1:])
+    if info["name"] is None or info["tile_size"] is None or info["grid"] is None:
+        raise DatasetError("%s: not a sim4cv map (no name, tile_size or grid line)" % path)
+    return info
+
+
+def _side(a, b) -> str:
+    dc, dr = b[0] - a[0], b[1] - a[1]
+    sides = {(1, 0): "E", (-1, 0): "W", (0, -1): "N", (0, 1): "S"}
+    if (dc, dr) not in sides:
+        raise DatasetError("route tiles %s and %s are not neighbours" % (a, b))
+    return sides[(dc, dr)]
+
+
+class RoutePath:
+    """The right-lane centre line of a route: straight lines and quarter
+    circles, exact, as the daemon's RoadGraph builds them."""
+
+    def __init__(self, map_info: dict, route: str):
+        closed, tiles = map_info["routes"][route]
+        t = map_info["tile_size"]
+        w, h = map_info["grid"]
+        self.closed = closed
+        self.segments = []  # (start_u, length, kind, params)
+        n = len(tiles)
+        indices = range(n) if closed else range(1, n - 1)
+        u = 0.0
+        for i in indices:
+            tile, prev, nxt = tiles[i], tiles[(i - 1) % n], tiles[(i + 1) % n]
+            ox, oy = (tile[0] + 0.5 - w / 2.0) * t, (h / 2.0 - tile[1] - 0.5) * t
+            n_in, n_out = _NORMALS[_side(tile, prev)], _NORMALS[_side(tile, nxt)]
+            if n_in == n_out:
+                raise DatasetError("route %r turns back at tile %s (U-turns are not supported)" % (route, tile))
+            d_in, d_out = (-n_in[0], -n_in[1]), n_out
+            half = t / 2.0
+            entry = (ox + half * n_in[0] + LANE_OFFSET_M * d_in[1], oy + half * n_in[1] - LANE_OFFSET_M * d_in[0])
+            if n_in == (-n_out[0], -n_out[1]):
+                length = t
+                params = (entry, math.atan2(d_in[1], d_in[0]))
+                self.segments.append((u, length, "line", params))
+            else:
+                cx, cy = ox + half * (n_in[0] + n_out[0]), oy + half * (n_in[1] + n_out[1])
+                r = math.hypot(entry[0] - cx, entry[1] - cy)
+                ccw = 1.0 if d_in[0] * d_out[1] - d_in[1] * d_out[0] > 0 else -1.0
+                length = r * math.pi / 2.0
+                params = (cx, cy, r, math.atan2(entry[1] - cy, entry[0] - cx), ccw)
+                self.segments.append((u, length, "arc", params))
+            u += length
+        self.length = u
+
+    def point(self, u: float) -> Tuple[float, float, float]:
+        """(x, y, heading rad) at arc length u (wrapping on a closed route)."""
+        if self.closed:
+            u %= self.length
+        u = min(max(u, 0.0), self.length)
+        lo, hi = 0, len(self.segments) - 1
+        while lo < hi:  # last segment starting at or before u
+            mid = (lo + hi + 1) // 2
+            if self.segments[mid][0] <= u:
+                lo = mid
+            else:
+                hi = mid - 1
+        start, length, kind, p = self.segments[lo]
+        s = min(u - start, length)
+        if kind == "line":
+            (ex, ey), heading = p
+            return ex + s * math.cos(heading), ey + s * math.sin(heading), heading
+        cx, cy, r, a0, ccw = p
+        a = a0 + ccw * s / r
+        return cx + r * math.cos(a), cy + r * math.sin(a), _wrap(a + ccw * math.pi / 2.0)
+
+
+def _wrap(a: float) -> float:
+    return math.atan2(math.sin(a), math.cos(a))
+
+
+def lane_samples(path: RoutePath, straight_step: float, turn_step: float):
+    """Arc lengths to sample: turn_step where the heading changes by more
+    than TURN_THRESHOLD_DEG over the next TURN_LOOKAHEAD_M, else straight_step;
+    an open route stops where the last waypoint still lies on it."""
+    end = path.length if path.closed else path.length - WAYPOINT_STEP_M * WAYPOINT_COUNT
+    u = 0.0
+    while u < end - 1e-9:
+        yield u
+        turn = abs(_wrap(path.point(u + TURN_LOOKAHEAD_M)[2] - path.point(u)[2])) > math.radians(TURN_THRESHOLD_DEG)
+        u += turn_step if turn else straight_step
+
+
+# ---------------------------------------------------------------------------
+# Selecting maps
+
+def resolve_maps(specs: Sequence[str], surroundings: Sequence[str], scenes_dir: Optional[str] = None):
+    """[(path, set or "")] for --maps values: train|val|test or map files."""
+    from .daemon import REPO_ROOT
+    scenes_dir = scenes_dir or os.path.join(REPO_ROOT, "scenes", "driving")
+    out = []
+    for spec in specs:
+        if spec in SETS:
+            found = []
+            for surr in surroundings:
+                found += glob.glob(os.path.join(scenes_dir, spec, "*_%s.map" % surr))
+            if not found:
+                raise DatasetError("no %s maps of surroundings %s in %s" % (spec, ",".join(surroundings), scenes_dir))
+            out += [(os.path.abspath(p), spec) for p in sorted(found)]
+        else:
+            if not os.path.isfile(spec):
+                raise DatasetError("--maps %s: neither train, val, test nor a map file" % spec)
+            parent = os.path.basename(os.path.dirname(os.path.abspath(spec)))
+            out.append((os.path.abspath(spec), parent if parent in SETS else ""))
+    return out
+
+
+def map_steps(map_set: str, straight_step: Optional[float], turn_step: Optional[float]) -> Tuple[float, float]:
+    default_straight, default_turn = (EVAL_STEP_M, EVAL_STEP_M) if map_set in ("val", "test") else (0.8, 0.2)
+    return (straight_step if straight_step is not None else default_straight,
+            turn_step if turn_step is not None else default_turn)
+
+
+# ---------------------------------------------------------------------------
+# The output folder
+
+def _write_json(path: str, data: dict) -> None:
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(data, f, indent=1, sort_keys=True)
+        f.write("\n")
+    os.replace(tmp, path)
+
+
+def check_out_dir(out: str, settings: dict) -> Optional[dict]:
+    """Refuses (DatasetError) an unwritable DIR or one holding another
+    dataset; returns the existing dataset.json (same settings) or None."""
+    try:
+        os.makedirs(out, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".write-test-", dir=out)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as e:
+        raise DatasetError("output folder %s is not writable: %s" % (out, e)) from None
+    meta_path = os.path.join(out, "dataset.json")
+    if os.path.exists(meta_path):
+        try:
+            with open(meta_path) as f:
+                meta = json.load(f)
+        except (OSError, ValueError) as e:
+            raise DatasetError("%s is unreadable (%s); refusing to overwrite it" % (meta_path, e)) from None
+        old = meta.get("settings")
+        if old != json.loads(json.dumps(settings)):
+            diff = sorted(k for k in set(old or {}) | set(settings) if (old or {}).get(k) != settings.get(k))
+            raise DatasetError("%s holds a dataset made with other settings (differing: %s); "
+                               "use another --out or the same settings; nothing was overwritten"
+                               % (out, ", ".join(diff)))
+        return meta
+    for name in ("labels.csv", "images"):
+        if os.path.exists(os.path.join(out, name)):
+            raise DatasetError("%s holds %s but no dataset.json: not a dataset of this generator; "
+                               "refusing to overwrite it" % (out, name))
+    return None
+
+
+def _rebuild_labels(out: str, meta: dict) -> None:
+    tmp = os.path.join(out, "labels.csv.tmp")
+    with open(tmp, "w", newline="") as dst:
+        dst.write(",".join(COLUMNS) + "\n")
+        for name in meta["order"]:
+            if meta["maps"].get(name, {}).get("complete"):
+                with open(os.path.join(out, "parts", name + ".csv")) as src:
+                    shutil.copyfileobj(src, dst)
+    os.replace(tmp, os.path.join(out, "labels.csv"))
+
+
+# ---------------------------------------------------------------------------
+# Generating one map
+
+def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -> dict:
+    """Renders and labels one map into out/images/<name>/ and out/parts/<name>.csv."""
+    import cv2
+    import sim4cv
+    from .daemon import OwnDaemon
+
+    info = parse_map(path)
+    name = info["name"]
+    straight_step, turn_step = map_steps(map_set, settings["straight_step"], settings["turn_step"])
+    rng = np.random.default_rng([settings["seed"], zlib.crc32(name.encode())])
+    cam = CAMERA_SETTINGS
+    img_dir = os.path.join(out, "images", name)
+    os.makedirs(img_dir)
+    part_path = os.path.join(out, "parts", name + ".csv")
+    counts = {"samples": 0, "images": 0, "junction_turns": 0, "max_lane_error_m": 0.0}
+    t0 = time.monotonic()
+    flags = ["--map", path, "--traffic-cars", "0", "--traffic-parked", "0", "--traffic-pedestrians", "0"]
+    with OwnDaemon(flags, mode="lockstep") as daemon, \
+            sim4cv.connect(daemon.address, name="driving_dataset", timeout=30.0) as client, \
+            open(part_path, "w", newline="") as part:
+        writer = csv.writer(part)
+        world = client.get_world()
+        for entity in world.entities:
+            if entity.name in ("car", "uav"):  # the map's car (and the UAV filming it) must not be seen
+                client.remove(entity.id)
+        client.add_camera(CAMERA, width=cam["width"], height=cam["height"], fov_y_deg=cam["fov_y_deg"],
+                          pitch_down_deg=cam["pitch_down_deg"], offset=(0.0, 0.0, cam["height_m"]))
+        client.subscribe(CAMERA, ["rgb"], "lockstep")
+        index = 0
+        for route in world.routes:
+            if route not in info["routes"]:
+                raise DatasetError("%s: route %r of the daemon's WorldInfo is not in the map file" % (path, route))
+            lane = RoutePath(info, route)
+            for u in lane_samples(lane, straight_step, turn_step):
+                if settings["max_samples"] and counts["samples"] >= settings["max_samples"]:
+                    break
+                x, y, yaw = lane.point(u)
+                geometric = [lane.point(u + WAYPOINT_STEP_M * k)[:2] for k in range(1, WAYPOINT_COUNT + 1)]
+                road = client.query_road(x, y, count=WAYPOINT_COUNT, step=WAYPOINT_STEP_M,
+                                         heading_deg=math.degrees(yaw))
+                counts["max_lane_error_m"] = max(counts["max_lane_error_m"], road.distance)
+                if road.distance > 0.25:
+                    raise DatasetError("%s route %r at %.1f m: the lane geometry is %.2f m off the daemon's lane"
+                                       % (name, route, u, road.distance))
+                queried = [(p.position.x, p.position.y) for p in road.ahead]
+                if len(queried) == WAYPOINT_COUNT and all(
+                        math.hypot(a[0] - b[0], a[1] - b[1]) < 0.05 for a, b in zip(queried, geometric)):
+                    waypoints = queried
+                else:  # QueryRoad goes straight on at a junction where the route turns
+                    waypoints = geometric
+                    counts["junction_turns"] += 1
+                for vx, vy, vyaw, off_m, off_deg in dl.all_views(x, y, yaw, settings["views"], rng,
+                                                                 settings["random_views"]):
+                    client.set_camera_pose(CAMERA, vx, vy, cam["height_m"], math.degrees(vyaw),
+                                           cam["pitch_down_deg"])
+                    frame = client.step_and_receive(timeout=30.0)
+                    rel = os.path.join("images", name, "%06d.png" % index)
+                    if not cv2.imwrite(os.path.join(out, rel), np.ascontiguousarray(frame.image("rgb")[:, :, ::-1])):
+                        raise DatasetError("could not write %s" % os.path.join(out, rel))
+                    labels = dl.encode(vx, vy, vyaw, waypoints)
+                    writer.writerow([rel, name, info["surroundings"], route, counts["samples"],
+                                     "%.4f" % vx, "%.4f" % vy, "%.4f" % math.degrees(vyaw),
+                                     "%.4f" % off_m, "%.4f" % off_deg]
+                                    + ["%.4f" % c for vh in labels for c in vh] + [0])
+                    index += 1
+                    counts["images"] += 1
+                counts["samples"] += 1
+        seconds = time.monotonic() - t0
+    counts.update(seconds=round(seconds, 2), images_per_s=round(counts["images"] / max(seconds, 1e-9), 2),
+                  straight_step=straight_step, turn_step=turn_step, path=path, complete=True)
+    log("%s: %d samples, %d images in %.1f s (%.1f images/s)"
+        % (name, counts["samples"], counts["images"], seconds, counts["images_per_s"]))
+    return counts
+
+
+def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: str = "random",
+             random_views: int = dl.DEFAULT_RANDOM_VIEWS, straight_step: Optional[float] = None,
+             turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, log=print) -> dict:
+    """Generates (or resumes) the dataset in `out`; returns dataset.json's content."""
+    if views not in dl.VIEW_MODES:
+        raise DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
+    resolved = resolve_maps(maps, surroundings)
+    settings = {
+        "format": FORMAT_VERSION, "maps": [p for p, _ in resolved], "surroundings": list(surroundings),
+        "views": views, "random_views": random_views if views == "random" else 0,
+        "straight_step": straight_step, "turn_step": turn_step, "max_samples": max_samples, "seed": seed,
+        "camera": dict(CAMERA_SETTINGS, name=CAMERA),
+        "waypoints": {"count": WAYPOINT_COUNT, "step_m": WAYPOINT_STEP_M},
+        "augmentation": {"random_offset_m": dl.RANDOM_OFFSET_M, "random_yaw_deg": dl.RANDOM_YAW_DEG,
+                         "fixed_offsets_m": list(dl.FIXED_OFFSETS_M), "fixed_yaws_deg": list(dl.FIXED_YAWS_DEG)},
+        "turn": {"lookahead_m": TURN_LOOKAHEAD_M, "threshold_deg": TURN_THRESHOLD_DEG},
+    }
+    meta = check_out_dir(out, settings)
+    names = [parse_map(p)["name"] for p, _ in resolved]
+    if meta is None:
+        meta = {"settings": settings, "maps": {}, "order": names}
+    os.makedirs(os.path.join(out, "parts"), exist_ok=True)
+    t0 = time.monotonic()
+    made = 0
+    for (path, map_set), name in zip(resolved, names):
+        if meta["maps"].get(name, {}).get("complete"):
+            log("%s: complete, skipped" % name)
+            continue
+        shutil.rmtree(os.path.join(out, "images", name), ignore_errors=True)  # interrupted: redo
+        meta["maps"][name] = {"complete": False}
+        _write_json(os.path.join(out, "dataset.json"), meta)
+        meta["maps"][name] = generate_map(path, map_set, out, settings, log)
+        made += meta["maps"][name]["images"]
+        _rebuild_labels(out, meta)
+        _update_counts(meta)
+        _write_json(os.path.join(out, "dataset.json"), meta)
+    _rebuild_labels(out, meta)
+    _update_counts(meta)
+    _write_json(os.path.join(out, "dataset.json"), meta)
+    seconds = time.monotonic() - t0
+    if made:
+        log("made %d images in %.1f s: %.1f images/s" % (made, seconds, made / seconds))
+    log("dataset %s: %d maps, %d samples, %d images" % (out, meta["counts"]["maps"], meta["counts"]["samples"],
+                                                         meta["counts"]["images"]))
+    return meta
+
+
+def _update_counts(meta: dict) -> None:
+    done = [m for m in meta["maps"].values() if m.get("complete")]
+    images = sum(m["images"] for m in done)
+    seconds = sum(m["seconds"] for m in done)
+    meta["counts"] = {"maps": len(done), "samples": sum(m["samples"] for m in done), "images": images,
+                      "seconds": round(seconds, 2)}
+    meta["images_per_s"] = round(images / seconds, 2) if seconds else 0.0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python3 -m sim4cv.driving_dataset", description=__doc__.split("\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    g = sub.add_parser("generate", help="render and label the dataset into --out")
+    g.add_argument("--maps", nargs="+", required=True, help="train, val, test and/or map files")
+    g.add_argument("--surroundings", default="desert,urban", help="comma-separated: desert, urban")
+    g.add_argument("--out", required=True)
+    g.add_argument("--views", default="random", choices=dl.VIEW_MODES)
+    g.add_argument("--random-views", type=int, default=dl.DEFAULT_RANDOM_VIEWS,
+                   help="augmented views per sample with --views random (default %(default)s)")
+    g.add_argument("--straight-step", type=float, default=None, help="metres (default 0.8; val/test 2)")
+    g.add_argument("--turn-step", type=float, default=None, help="metres (default 0.2; val/test 2)")
+    g.add_argument("--max-samples", type=int, default=0, help="lane samples per map at most (0: all)")
+    g.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    surroundings = [s for s in args.surroundings.split(",") if s]
+    for s in surroundings:
+        if s not in ("desert", "urban"):
+            parser.error("--surroundings %s: desert and/or urban" % s)
+    for step in (args.straight_step, args.turn_step):
+        if step is not None and step <= 0:
+            parser.error("steps must be positive")
+    try:
+        generate(args.maps, surroundings, args.out, args.views, args.random_views, args.straight_step,
+                 args.turn_step, args.max_samples, args.seed)
+    except DatasetError as e:
+        print("error: %s" % e, file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
