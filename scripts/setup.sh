@@ -12,6 +12,7 @@ PACKAGES=(
   python3 python3-protobuf python3-numpy python3-pytest python3-pip python3-setuptools python3-wheel  # wheel: pip install of clients/python
   python3-opencv  # the Python examples (an OpenCV tracker in the loop)
   python3-matplotlib python3-yaml  # tracking evaluation plots and experiment files
+  python3-torch python3-onnx  # the driving network: training on the CPU, ONNX export for OpenCV DNN
   octave liboctave-dev  # the Octave client: mkoctfile --mex, and its tests
   clang libclang-rt-14-dev  # the fuzz build (scripts/fuzz.sh): clang and its libFuzzer/sanitizer runtimes
 )

@@ -1,0 +1,72 @@
+"""The driving case study's controller (docs/driving.md, "Network and
+controller"): sim4cv Controls (steering, throttle, brake) from the 4
+predicted waypoints v1 h1 ... v4 h4 (metres; v forward, h POSITIVE TO THE
+RIGHT, as labels.csv and sim4cv.driving_labels).
+
+Steering (the paper's rule): the wheel angle is the angle to the first
+waypoint, atan(h1 / v1), scaled to Controls.steering by the car's maximum
+front wheel angle (CarParams.max_steering_deg, 35 deg by default,
+docs/vehicles.md "Parameters"):
+
+    steering = clip(gain * atan2(h1, v1) / radians(max_steering_deg), -1, 1)
+
+positive = right, like Controls.steering (+1 = full right, the wheels at
+max_steering_deg). v1 <= 0 (the point beside or behind the car): full lock
+towards the side of h1 (0 if h1 == 0).
+
+Throttle from the last waypoint's sideways offset |h4| (8 m ahead): high on
+straights, lower as a turn approaches:
+
+    throttle = clip(t_max - k * |h4|, t_min, t_max)
+
+and 0 when `speed` >= `max_speed` (the optional speed cap). Brake is 0.
+
+Pure functions, no daemon, no numpy.
+"""
+
+import math
+from typing import Optional, Sequence, Tuple
+
+MAX_STEERING_DEG = 35.0  # CarParams.max_steering_deg (docs/vehicles.md)
+THROTTLE_MAX = 1.0       # on a straight (|h4| = 0)
+THROTTLE_MIN = 0.3       # floor in sharp turns
+THROTTLE_PER_M = 0.25    # throttle lost per metre of |h4|
+
+
+def steering_from_waypoint(v1: float, h1: float, max_steering_deg: float = MAX_STEERING_DEG,
+                           gain: float = 1.0) -> float:
+    """Controls.steering in [-1, 1] (positive right) towards the waypoint
+    (v1 forward, h1 right, metres): gain * atan2(h1, v1) / max wheel angle,
+    clamped. v1 <= 0: -1, 0 or +1 by the sign of h1."""
+    if max_steering_deg <= 0:
+        raise ValueError("steering_from_waypoint: max_steering_deg must be positive, got %r" % max_steering_deg)
+    if v1 <= 0:
+        return float((h1 > 0) - (h1 < 0))
+    steering = gain * math.atan2(h1, v1) / math.radians(max_steering_deg)
+    return max(-1.0, min(1.0, steering))
+
+
+def throttle_from_waypoint(h4: float, t_max: float = THROTTLE_MAX, t_min: float = THROTTLE_MIN,
+                           k: float = THROTTLE_PER_M, speed: Optional[float] = None,
+                           max_speed: Optional[float] = None) -> float:
+    """Controls.throttle in [0, 1]: clip(t_max - k * |h4|, t_min, t_max);
+    0 when both `speed` and `max_speed` (m/s) are given and speed >= max_speed."""
+    if not 0 <= t_min <= t_max <= 1:
+        raise ValueError("throttle_from_waypoint: need 0 <= t_min <= t_max <= 1, got %r, %r" % (t_min, t_max))
+    if speed is not None and max_speed is not None and speed >= max_speed:
+        return 0.0
+    return max(t_min, min(t_max, t_max - k * abs(h4)))
+
+
+def controls_from_waypoints(waypoints: Sequence[float], speed: Optional[float] = None,
+                            max_speed: Optional[float] = None, max_steering_deg: float = MAX_STEERING_DEG,
+                            gain: float = 1.0, t_max: float = THROTTLE_MAX, t_min: float = THROTTLE_MIN,
+                            k: float = THROTTLE_PER_M) -> Tuple[float, float, float]:
+    """(steering, throttle, brake) for Client.SendControls from the 8
+    numbers v1 h1 v2 h2 v3 h3 v4 h4 (e.g. the network's output); brake 0."""
+    w = [float(x) for x in waypoints]
+    if len(w) != 8:
+        raise ValueError("controls_from_waypoints: expected 8 numbers v1 h1 ... v4 h4, got %d" % len(w))
+    steering = steering_from_waypoint(w[0], w[1], max_steering_deg, gain)
+    throttle = throttle_from_waypoint(w[7], t_max, t_min, k, speed, max_speed)
+    return steering, throttle, 0.0

@@ -1,0 +1,163 @@
+"""The driving case study's network (sim4cv.driving_net: shapes, goal,
+training steps, ONNX export run by OpenCV's DNN) and controller
+(sim4cv.driving_control, hand-computed cases). CPU only, a few seconds."""
+
+import math
+import os
+import sys
+
+import numpy as np
+import pytest
+
+REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
+
+from sim4cv import driving_control as dc  # noqa: E402
+
+torch = pytest.importorskip("torch")
+from sim4cv import driving_net as dn  # noqa: E402
+
+SIZES = [(180, 320), (90, 160)]
+
+
+def _images(n, h, w, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    return torch.randint(0, 256, (n, 3, h, w), generator=g).float()
+
+
+@pytest.mark.parametrize("h,w", SIZES)
+@pytest.mark.parametrize("use_goal", [False, True])
+def test_output_shape(h, w, use_goal):
+    torch.manual_seed(0)
+    model = dn.WaypointNet(h, w, use_goal=use_goal).eval()
+    x = _images(2, h, w)
+    with torch.no_grad():
+        out = model(x, torch.tensor([-1.0, 1.0]) if use_goal else None)
+    assert out.shape == (2, 8)
+    assert torch.isfinite(out).all()
+
+
+def test_conv_sizes_and_pool_windows():
+    assert dn.conv_output_size(180, 320) == (15, 33)
+    assert dn.conv_output_size(90, 160) == (4, 13)
+    assert dn.pool_window(15, 2) == (8, 7)   # windows [0, 8), [7, 15)
+    assert dn.pool_window(4, 2) == (2, 2)    # torch's adaptive bins
+    with pytest.raises(ValueError):
+        dn.WaypointNet(40, 40)               # too small for the pooling
+
+
+def test_goal_changes_output():
+    torch.manual_seed(0)
+    model = dn.WaypointNet(90, 160, use_goal=True).eval()
+    x = _images(1, 90, 160).repeat(3, 1, 1, 1)
+    with torch.no_grad():
+        out = model(x, torch.tensor([-1.0, 0.0, 1.0]))
+        none = model(x[:1])
+    assert not torch.allclose(out[0], out[1]) and not torch.allclose(out[1], out[2])
+    assert torch.allclose(none[0], out[1])  # a missing goal is 0
+    with pytest.raises(ValueError):
+        dn.WaypointNet(90, 160)(x[:1], torch.zeros(1))
+
+
+def test_adam_reduces_l2_loss():
+    torch.manual_seed(0)
+    model = dn.WaypointNet(90, 160, use_goal=True)
+    x = _images(4, 90, 160, seed=1)
+    goal = torch.tensor([-1.0, 0.0, 0.0, 1.0])
+    target = torch.tensor([[2.0, 0.1, 4.0, 0.4, 6.0, 0.9, 8.0, 1.6]]).repeat(4, 1)
+    opt = torch.optim.Adam(model.parameters(), lr=1e-3)
+    losses = []
+    for _ in range(8):
+        opt.zero_grad()
+        loss = ((model(x, goal) - target) ** 2).sum(1).mean()
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    assert losses[-1] < 0.5 * losses[0], losses
+
+
+@pytest.mark.parametrize("h,w", SIZES)
+@pytest.mark.parametrize("use_goal", [False, True])
+def test_onnx_opencv_matches_torch(tmp_path, h, w, use_goal):
+    torch.manual_seed(0)
+    model = dn.WaypointNet(h, w, use_goal=use_goal)
+    path = str(tmp_path / "net.onnx")
+    dn.export_onnx(model, path, h, w)
+    assert model.training  # export leaves the mode as it was
+    model.eval()
+    run = dn.load_onnx_with_opencv(path, use_goal=use_goal)
+    rng = np.random.RandomState(3)
+    for goal in ([-1.0, 1.0] if use_goal else [0.0]):
+        img = rng.randint(0, 256, (h, w, 3), dtype=np.uint8)
+        x = torch.from_numpy(img.transpose(2, 0, 1)[None].astype(np.float32))
+        with torch.no_grad():
+            ref = model(x, torch.tensor([[goal]]) if use_goal else None).numpy().reshape(-1)
+        out = run(img, goal)
+        assert out.shape == (8,)
+        np.testing.assert_allclose(out, ref, atol=1e-4, rtol=0)
+
+
+def test_onnx_contract(tmp_path):
+    pytest.importorskip("onnx")
+    path = str(tmp_path / "net.onnx")
+    dn.export_onnx(dn.WaypointNet(90, 160, use_goal=True), path)
+    assert list(dn.onnx_input_names(path)) == ["image", "goal"]
+    import onnx
+    m = onnx.load(path)
+    dims = {i.name: [d.dim_value for d in i.type.tensor_type.shape.dim] for i in m.graph.input}
+    assert dims["image"] == [1, 3, 90, 160] and dims["goal"] == [1, 1]
+    assert [o.name for o in m.graph.output] == ["waypoints"]
+    assert m.opset_import[0].version == 11
+    dn.load_onnx_with_opencv(path)(np.zeros((90, 160, 3), np.uint8), 1.0)  # use_goal read from the file
+
+
+# ---- controller ----
+
+def test_straight_full_throttle():
+    assert dc.controls_from_waypoints([2, 0, 4, 0, 6, 0, 8, 0]) == (0.0, 1.0, 0.0)
+
+
+def test_point_to_the_right():
+    # atan(0.5 / 2) = 14.036 deg; / 35 deg = 0.40104
+    s = dc.steering_from_waypoint(2.0, 0.5)
+    assert s == pytest.approx(math.degrees(math.atan(0.25)) / 35.0)
+    assert s == pytest.approx(0.40104, abs=1e-5)
+    assert dc.steering_from_waypoint(2.0, -0.5) == pytest.approx(-s)
+    assert dc.steering_from_waypoint(2.0, 0.5, max_steering_deg=28.07) == pytest.approx(0.5, abs=1e-3)
+
+
+def test_turn_lowers_throttle():
+    # the labels of a right turn of radius 20 m (docs/driving.md): h4 = 1.58 -> 1 - 0.25 * 1.58 = 0.605
+    s, t, b = dc.controls_from_waypoints([2.00, 0.10, 3.97, 0.40, 5.91, 0.89, 7.79, 1.58])
+    assert t == pytest.approx(0.605) and b == 0.0 and s > 0
+    assert dc.throttle_from_waypoint(-1.58) == pytest.approx(0.605)  # left turn: same
+    assert dc.throttle_from_waypoint(5.0) == pytest.approx(0.3)      # floor t_min
+    assert dc.throttle_from_waypoint(1.0, t_max=0.6, t_min=0.2, k=0.3) == pytest.approx(0.3)
+
+
+def test_speed_cap():
+    assert dc.throttle_from_waypoint(0.0, speed=9.9, max_speed=10.0) == 1.0
+    assert dc.throttle_from_waypoint(0.0, speed=10.0, max_speed=10.0) == 0.0
+    assert dc.controls_from_waypoints([2, 0, 4, 0, 6, 0, 8, 0], speed=12.0, max_speed=10.0)[1] == 0.0
+
+
+def test_steering_clamped():
+    assert dc.steering_from_waypoint(1.0, 5.0) == 1.0    # 78.7 deg > 35
+    assert dc.steering_from_waypoint(1.0, -5.0) == -1.0
+    assert dc.steering_from_waypoint(2.0, 0.5, gain=10.0) == 1.0
+
+
+def test_v1_not_ahead():
+    assert dc.steering_from_waypoint(0.0, 1.0) == 1.0
+    assert dc.steering_from_waypoint(-2.0, -0.1) == -1.0
+    assert dc.steering_from_waypoint(-2.0, 0.0) == 0.0
+    assert dc.steering_from_waypoint(0.0, 0.0) == 0.0
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError):
+        dc.controls_from_waypoints([2, 0, 4, 0])
+    with pytest.raises(ValueError):
+        dc.steering_from_waypoint(2, 0, max_steering_deg=0)
+    with pytest.raises(ValueError):
+        dc.throttle_from_waypoint(0, t_min=0.8, t_max=0.5)
