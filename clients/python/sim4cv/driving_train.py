@@ -1,0 +1,239 @@
+"""Trains the driving case study's WaypointNet (docs/driving.md, "Training")
+on datasets written by sim4cv.driving_dataset.
+
+    python3 -m sim4cv.driving_train --train DIR --val DIR --out OUT \\
+        [--epochs N] [--batch 32] [--lr 5e-5] [--patience 5] [--downscale 2] \\
+        [--goal] [--max-samples N] [--threads N] [--force]
+
+L2 (MSE) loss on the 8 offsets v1 h1 ... v4 h4, Adam, the validation loss
+after every epoch, early stopping on it (the best state is kept). Writes
+OUT/model.pt (state dict + settings), OUT/model.onnx (export_onnx) and
+OUT/training.json (per-epoch losses, samples/s, seconds, settings, best epoch).
+
+Refusals (exit status 2, "error: ..."): a dataset folder without labels.csv,
+labels.csv missing columns, an OUT holding a model trained with other
+settings (unless --force).
+"""
+
+import argparse
+import copy
+import csv
+import json
+import math
+import os
+import sys
+import time
+from typing import Dict, List, Optional
+
+import numpy as np
+import torch
+from torch.utils.data import DataLoader, Dataset
+
+from sim4cv.driving_net import DEFAULT_HEIGHT, DEFAULT_WIDTH, WaypointNet, export_onnx
+
+TARGETS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
+REQUIRED = ["image"] + TARGETS + ["goal"]
+# the settings that make two models different (a rerun with other ones is refused unless --force)
+MODEL_SETTINGS = ("train", "val", "epochs", "batch", "lr", "patience", "downscale", "goal", "max_samples")
+
+
+class TrainError(Exception):
+    """A refusal: the message names the problem."""
+
+
+def read_labels(folder: str, max_samples: int = 0) -> List[Dict[str, str]]:
+    path = os.path.join(folder, "labels.csv")
+    if not os.path.isdir(folder):
+        raise TrainError("dataset folder %s does not exist" % folder)
+    if not os.path.isfile(path):
+        raise TrainError("dataset folder %s has no labels.csv" % folder)
+    with open(path, newline="") as f:
+        reader = csv.DictReader(f)
+        missing = [c for c in REQUIRED if c not in (reader.fieldnames or [])]
+        if missing:
+            raise TrainError("%s is missing columns: %s" % (path, ", ".join(missing)))
+        rows = list(reader)
+    if not rows:
+        raise TrainError("%s has no rows" % path)
+    if max_samples and max_samples > 0:
+        rows = rows[:max_samples]
+    return rows
+
+
+class DrivingDataset(Dataset):
+    """labels.csv rows -> (image float32 3xHxW in 0..255 RGB, goal float32 (1,), targets float32 (8,))."""
+
+    def __init__(self, folder: str, downscale: int = 1, max_samples: int = 0):
+        import cv2  # noqa: F401  (fail early without OpenCV)
+        self.folder = folder
+        self.downscale = downscale
+        self.rows = read_labels(folder, max_samples)
+        self.targets = np.array([[float(r[c]) for c in TARGETS] for r in self.rows], dtype=np.float32)
+        self.goals = np.array([float(r["goal"] or 0) for r in self.rows], dtype=np.float32).reshape(-1, 1)
+        if not np.all(np.isfinite(self.targets)):
+            raise TrainError("%s: labels.csv holds non-finite targets" % folder)
+        self.height = DEFAULT_HEIGHT // downscale
+        self.width = DEFAULT_WIDTH // downscale
+
+    def __len__(self):
+        return len(self.rows)
+
+    def __getitem__(self, i):
+        import cv2
+        path = os.path.join(self.folder, self.rows[i]["image"])
+        img = cv2.imread(path, cv2.IMREAD_COLOR)
+        if img is None:
+            raise TrainError("cannot read image %s" % path)
+        img = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+        if img.shape[:2] != (self.height, self.width):
+            img = cv2.resize(img, (self.width, self.height), interpolation=cv2.INTER_AREA)
+        image = torch.from_numpy(np.ascontiguousarray(img.transpose(2, 0, 1))).float()
+        return image, torch.from_numpy(self.goals[i]), torch.from_numpy(self.targets[i])
+
+
+def _evaluate(model, loader, use_goal):
+    model.eval()
+    total, n = 0.0, 0
+    with torch.no_grad():
+        for image, goal, target in loader:
+            out = model(image, goal) if use_goal else model(image)
+            total += float(torch.nn.functional.mse_loss(out, target, reduction="sum")) / target.shape[1]
+            n += target.shape[0]
+    return total / max(n, 1)
+
+
+def _check_out(out: str, settings: dict, force: bool) -> None:
+    path = os.path.join(out, "training.json")
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise TrainError("output %s is not a folder" % out)
+    if force or not os.path.isfile(path):
+        if not force and os.path.isfile(os.path.join(out, "model.pt")):
+            raise TrainError("%s holds model.pt but no training.json (use --force to overwrite)" % out)
+        return
+    try:
+        with open(path) as f:
+            old = json.load(f).get("settings", {})
+    except (OSError, ValueError) as e:
+        raise TrainError("%s: unreadable training.json (%s); use --force to overwrite" % (out, e))
+    differ = [k for k in MODEL_SETTINGS if old.get(k) != settings.get(k)]
+    if differ:
+        raise TrainError("%s holds a model trained with other settings (%s); use --force to overwrite"
+                         % (out, ", ".join("%s: %r -> %r" % (k, old.get(k), settings.get(k)) for k in differ)))
+
+
+def train(train_dir: str, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
+          patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
+          threads: int = 0, force: bool = False, seed: int = 0, log=print) -> dict:
+    if downscale not in (1, 2):
+        raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
+    if epochs < 1 or batch < 1 or lr <= 0:
+        raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
+    settings = dict(train=os.path.abspath(train_dir), val=os.path.abspath(val_dir), epochs=epochs, batch=batch,
+                    lr=lr, patience=patience, downscale=downscale, goal=goal, max_samples=max_samples,
+                    threads=threads, seed=seed)
+    train_set = DrivingDataset(train_dir, downscale, max_samples)
+    val_set = DrivingDataset(val_dir, downscale, max_samples)
+    _check_out(out, settings, force)
+    try:
+        os.makedirs(out, exist_ok=True)
+    except OSError as e:
+        raise TrainError("cannot create output folder %s: %s" % (out, e))
+    if threads and threads > 0:
+        torch.set_num_threads(threads)
+    torch.manual_seed(seed)
+    height, width = train_set.height, train_set.width
+    settings.update(height=height, width=width, train_samples=len(train_set), val_samples=len(val_set))
+    model = WaypointNet(height, width, use_goal=goal)
+    opt = torch.optim.Adam(model.parameters(), lr=lr)
+    gen = torch.Generator()
+    gen.manual_seed(seed)
+    train_loader = DataLoader(train_set, batch_size=batch, shuffle=True, generator=gen)
+    val_loader = DataLoader(val_set, batch_size=batch, shuffle=False)
+
+    history, best, best_epoch, best_state, waited = [], math.inf, 0, None, 0
+    log("training on %d samples (%s), validating on %d, %dx%d, %d epochs at most"
+        % (len(train_set), train_dir, len(val_set), height, width, epochs))
+    for epoch in range(1, epochs + 1):
+        t0 = time.time()
+        model.train()
+        total, n = 0.0, 0
+        for image, g, target in train_loader:
+            opt.zero_grad()
+            outp = model(image, g) if goal else model(image)
+            loss = torch.nn.functional.mse_loss(outp, target)
+            loss.backward()
+            opt.step()
+            total += float(loss) * target.shape[0]
+            n += target.shape[0]
+        train_seconds = time.time() - t0
+        train_loss = total / max(n, 1)
+        val_loss = _evaluate(model, val_loader, goal)
+        seconds = time.time() - t0
+        entry = dict(epoch=epoch, train_loss=train_loss, val_loss=val_loss, seconds=seconds,
+                     train_samples_per_s=n / train_seconds if train_seconds > 0 else None)
+        history.append(entry)
+        improved = val_loss < best
+        if improved:
+            best, best_epoch, best_state, waited = val_loss, epoch, copy.deepcopy(model.state_dict()), 0
+        else:
+            waited += 1
+        log("epoch %d/%d: train %.5f  val %.5f%s  %.1f s  %.1f samples/s"
+            % (epoch, epochs, train_loss, val_loss, " (best)" if improved else "", seconds,
+               entry["train_samples_per_s"] or 0.0))
+        if patience > 0 and waited >= patience:
+            log("early stop: no better validation loss for %d epochs (best: epoch %d, %.5f)"
+                % (patience, best_epoch, best))
+            break
+    if best_state is None:  # every val loss was NaN: keep the last state
+        best_state, best_epoch = copy.deepcopy(model.state_dict()), len(history)
+    model.load_state_dict(best_state)
+    torch.save(dict(state_dict=best_state, settings=settings, best_epoch=best_epoch, targets=TARGETS),
+               os.path.join(out, "model.pt"))
+    export_onnx(model, os.path.join(out, "model.onnx"), height, width)
+    meta = dict(settings=settings, epochs=history, best_epoch=best_epoch, best_val_loss=best,
+                stopped_early=len(history) < epochs,
+                samples_per_s=(sum(e["train_samples_per_s"] or 0 for e in history) / len(history)),
+                outputs=["model.pt", "model.onnx", "training.json"])
+    with open(os.path.join(out, "training.json"), "w") as f:
+        json.dump(meta, f, indent=2)
+    log("best epoch %d (val %.5f); wrote %s" % (best_epoch, best, out))
+    return meta
+
+
+def load_model(path: str) -> WaypointNet:
+    """Loads OUT/model.pt back into a WaypointNet (eval mode)."""
+    saved = torch.load(path, map_location="cpu")
+    s = saved["settings"]
+    model = WaypointNet(s["height"], s["width"], use_goal=s["goal"])
+    model.load_state_dict(saved["state_dict"])
+    return model.eval()
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving_train", description=__doc__.split("\n\n")[0])
+    p.add_argument("--train", required=True, help="training dataset folder (holds labels.csv)")
+    p.add_argument("--val", required=True, help="validation dataset folder (holds labels.csv)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--epochs", type=int, default=50)
+    p.add_argument("--batch", type=int, default=32)
+    p.add_argument("--lr", type=float, default=5e-5)
+    p.add_argument("--patience", type=int, default=5, help="epochs without a better val loss before stopping (0: never)")
+    p.add_argument("--downscale", type=int, default=2, choices=(1, 2), help="2: train at 90x160")
+    p.add_argument("--goal", action="store_true", help="feed labels.csv's goal column to the model")
+    p.add_argument("--max-samples", type=int, default=0, help="rows of each labels.csv at most (0: all)")
+    p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
+    a = p.parse_args(argv)
+    try:
+        train(a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience,
+              downscale=a.downscale, goal=a.goal, max_samples=a.max_samples, threads=a.threads,
+              force=a.force, seed=a.seed, log=lambda m: print(m, flush=True))
+    except TrainError as e:
+        print("error: %s" % e, file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,78 @@
+"""sim4cv.driving_train on a tiny real dataset (the real sim4cvd renders it,
+as in test_driving_dataset.py): 2 epochs at 90x160, training.json, the ONNX
+export through OpenCV, and the refusals."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
+
+torch = pytest.importorskip("torch")
+
+from sim4cv import driving_dataset as dd  # noqa: E402
+from sim4cv import driving_net as dn  # noqa: E402
+from sim4cv import driving_train as dt  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    out = tmp_path_factory.mktemp("driving") / "ds"
+    dd.generate(maps=[os.path.join(REPO_ROOT, "scenes", "driving", "val", "01_desert.map")],
+                surroundings=["desert"], out=str(out), views="random", random_views=2, max_samples=6,
+                log=lambda *a: None)
+    return out
+
+
+def test_train_two_epochs_and_export(dataset, tmp_path):
+    out = tmp_path / "model"
+    logs = []
+    meta = dt.train(str(dataset), str(dataset), str(out), epochs=2, batch=8, downscale=2, threads=2,
+                    log=logs.append)
+    assert sum(line.startswith("epoch ") for line in logs) == 2
+    with open(out / "training.json") as f:
+        stored = json.load(f)
+    assert stored == json.loads(json.dumps(meta))
+    assert len(stored["epochs"]) == 2 and stored["best_epoch"] in (1, 2)
+    for e in stored["epochs"]:
+        assert math.isfinite(e["train_loss"]) and math.isfinite(e["val_loss"])
+        assert e["train_samples_per_s"] > 0 and e["seconds"] > 0
+    s = stored["settings"]
+    assert (s["height"], s["width"], s["downscale"], s["train_samples"]) == (90, 160, 2, 18)
+
+    model = dt.load_model(str(out / "model.pt"))
+    run = dn.load_onnx_with_opencv(str(out / "model.onnx"), use_goal=False)
+    ds = dt.DrivingDataset(str(dataset), downscale=2)
+    image, _, _ = ds[0]
+    got = run(image.numpy().transpose(1, 2, 0).astype(np.uint8))
+    assert got.shape == (8,) and np.all(np.isfinite(got))
+    with torch.no_grad():
+        want = model(image[None]).numpy().reshape(-1)
+    assert np.allclose(got, want, atol=1e-3)
+
+    # the same OUT with other settings is refused, --force overrides
+    with pytest.raises(dt.TrainError, match="other settings.*lr"):
+        dt.train(str(dataset), str(dataset), str(out), epochs=2, batch=8, lr=1e-3, log=lambda *a: None)
+
+
+def test_refusals(dataset, tmp_path):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    r = subprocess.run([sys.executable, "-m", "sim4cv.driving_train", "--train", str(empty), "--val",
+                        str(dataset), "--out", str(tmp_path / "o")], capture_output=True, text=True,
+                       cwd=os.path.join(REPO_ROOT, "clients", "python"))
+    assert r.returncode == 2 and "no labels.csv" in r.stderr and str(empty) in r.stderr
+    assert not (tmp_path / "o").exists()
+
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "labels.csv").write_text("image,v1,h1\nx.png,2,0\n")
+    assert dt.main(["--train", str(bad), "--val", str(dataset), "--out", str(tmp_path / "o")]) == 2
+    with pytest.raises(dt.TrainError, match="missing columns: v2"):
+        dt.read_labels(str(bad))
