@@ -5,6 +5,7 @@
 // in OpenLink (address.cpp).
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -21,6 +22,13 @@ class ShmClient;
 namespace sim4cv::detail {
 
 using Deadline = std::chrono::steady_clock::time_point;
+
+// The time left until `deadline` (zero once past), for the transports'
+// own clients, which take timeouts.
+inline std::chrono::milliseconds Until(Deadline deadline) {
+  return std::max(std::chrono::milliseconds(0),
+                  std::chrono::ceil<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()));
+}
 
 class Link {
  public:

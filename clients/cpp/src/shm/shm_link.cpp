@@ -21,10 +21,6 @@ constexpr auto kReplyPoll = std::chrono::milliseconds(5);
 // (--shm-expiry-ms, 5 s by default) keeps its attachment; the State is dropped.
 constexpr auto kKeepAlive = std::chrono::seconds(1);
 
-std::chrono::milliseconds Until(Deadline deadline) {
-  return std::max(std::chrono::milliseconds(0), std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()));
-}
-
 // `view`'s metadata and pixels into `frame` (buffers reused).
 void CopyFrame(const FrameView& view, const std::string& camera, proto::Frame& frame) {
   frame.Clear();

@@ -9,10 +9,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::chrono::milliseconds Until(Deadline deadline) {
-  return std::max(std::chrono::milliseconds(0), std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()));
-}
-
 class UdpLink : public Link {
  public:
   UdpLink(const std::string& host, uint16_t port)
