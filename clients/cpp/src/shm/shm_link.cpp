@@ -56,7 +56,10 @@ void CopyFrame(const FrameView& view, const std::string& camera, proto::Frame& f
 
 class ShmLink : public Link {
  public:
-  explicit ShmLink(const std::string& name) : address_("shm://" + name) { shm_.Open(name); }
+  explicit ShmLink(const std::string& name) : address_("shm://" + name) {
+    shm_.Open(name);
+    camera_ = shm_.camera();  // fixed for the ring's life: read once, not per frame
+  }
 
   const std::string& address() const override { return address_; }
 
@@ -129,7 +132,7 @@ class ShmLink : public Link {
   // daemon overwrote it while it was copied (the caller looks again).
   bool TakeNewest(Envelope& out) {
     if (!shm_.AcquireNewest(view_) || view_.frame_id() <= last_frame_id_) return false;
-    CopyFrame(view_, shm_.camera(), *out.mutable_frame());
+    CopyFrame(view_, camera_, *out.mutable_frame());
     if (view_.stale()) return false;
     last_frame_id_ = view_.frame_id();
     return true;
@@ -138,6 +141,7 @@ class ShmLink : public Link {
   std::string address_;
   std::string client_name_;
   ShmClient shm_;
+  std::string camera_;  // the ring's camera
   FrameView view_;
   uint64_t last_frame_id_ = 0;
   Clock::time_point last_send_ = Clock::now();

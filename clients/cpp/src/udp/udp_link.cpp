@@ -7,8 +7,6 @@
 namespace sim4cv::detail {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 class UdpLink : public Link {
  public:
   UdpLink(const std::string& host, uint16_t port)
