@@ -55,8 +55,9 @@ _NORMALS = {"N": (0.0, 1.0), "S": (0.0, -1.0), "E": (1.0, 0.0), "W": (-1.0, 0.0)
 
 
 def parse_map(path: str) -> dict:
-    """name, surroundings, tile_size, grid (W, H) and routes {name: (closed, [(col, row), ...])}."""
-    info = {"name": None, "surroundings": "", "tile_size": None, "grid": None, "routes": {}}
+    """name, surroundings, tile_size, grid (W, H), routes {name: (closed, [(col, row), ...])}
+    and objects [(kind, x, y, yaw_deg)]."""
+    info = {"name": None, "surroundings": "", "tile_size": None, "grid": None, "routes": {}, "objects": []}
     current = None
     with open(path) as f:
         for raw in f:
@@ -75,6 +76,8 @@ def parse_map(path: str) -> dict:
             elif key == "route":
                 current = words[1]
                 info["routes"][current] = (words[2] == "closed", [])
+            elif key == "object":
+                info["objects"].append((words[1], float(words[2]), float(words[3]), float(words[4])))
             elif key == "tiles" and current is not None:
                 info["routes"][current][1].extend(tuple(int(v) for v in w.split(",")) for w in words[1:])
     if info["name"] is None or info["tile_size"] is None or info["grid"] is None:

@@ -3,7 +3,7 @@ on datasets written by sim4cv.driving_dataset.
 
     python3 -m sim4cv.driving_train --train DIR --val DIR --out OUT \\
         [--epochs N] [--batch 32] [--lr 5e-5] [--patience 5] [--downscale 2] \\
-        [--goal] [--max-samples N] [--threads N] [--force]
+        [--goal] [--max-samples N] [--threads N] [--max-minutes M] [--force]
 
 L2 (MSE) loss on the 8 offsets v1 h1 ... v4 h4, Adam, the validation loss
 after every epoch, early stopping on it (the best state is kept). Writes
@@ -74,11 +74,21 @@ class DrivingDataset(Dataset):
             raise TrainError("%s: labels.csv holds non-finite targets" % folder)
         self.height = DEFAULT_HEIGHT // downscale
         self.width = DEFAULT_WIDTH // downscale
+        # decoded images, kept after the first epoch: PNG decoding and the
+        # resize cost about as much as a training step (90x160: 43 KB each)
+        self.cache = [None] * len(self.rows)
 
     def __len__(self):
         return len(self.rows)
 
     def __getitem__(self, i):
+        if self.cache[i] is None:
+            self.cache[i] = self._read(i)
+        image = torch.from_numpy(self.cache[i]).float()
+        return image, torch.from_numpy(self.goals[i]), torch.from_numpy(self.targets[i])
+
+    def _read(self, i: int) -> np.ndarray:
+        """The image of row i as uint8 3 x H x W RGB."""
         import cv2
         path = os.path.join(self.folder, self.rows[i]["image"])
         img = cv2.imread(path, cv2.IMREAD_COLOR)
@@ -87,8 +97,7 @@ class DrivingDataset(Dataset):
         img = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
         if img.shape[:2] != (self.height, self.width):
             img = cv2.resize(img, (self.width, self.height), interpolation=cv2.INTER_AREA)
-        image = torch.from_numpy(np.ascontiguousarray(img.transpose(2, 0, 1))).float()
-        return image, torch.from_numpy(self.goals[i]), torch.from_numpy(self.targets[i])
+        return np.ascontiguousarray(img.transpose(2, 0, 1))
 
 
 def _evaluate(model, loader, use_goal):
@@ -123,7 +132,7 @@ def _check_out(out: str, settings: dict, force: bool) -> None:
 
 def train(train_dir: str, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
           patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
-          threads: int = 0, force: bool = False, seed: int = 0, log=print) -> dict:
+          threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
     if epochs < 1 or batch < 1 or lr <= 0:
@@ -175,28 +184,42 @@ def train(train_dir: str, val_dir: str, out: str, epochs: int = 50, batch: int =
         improved = val_loss < best
         if improved:
             best, best_epoch, best_state, waited = val_loss, epoch, copy.deepcopy(model.state_dict()), 0
+            _write(out, model, best_state, settings, history, best_epoch, best, epochs, finished=False)
         else:
             waited += 1
         log("epoch %d/%d: train %.5f  val %.5f%s  %.1f s  %.1f samples/s"
             % (epoch, epochs, train_loss, val_loss, " (best)" if improved else "", seconds,
                entry["train_samples_per_s"] or 0.0))
+        if max_minutes > 0 and sum(e["seconds"] for e in history) > 60.0 * max_minutes:
+            log("time budget of %g minutes spent after epoch %d (best: epoch %d, %.5f)"
+                % (max_minutes, epoch, best_epoch, best))
+            break
         if patience > 0 and waited >= patience:
             log("early stop: no better validation loss for %d epochs (best: epoch %d, %.5f)"
                 % (patience, best_epoch, best))
             break
     if best_state is None:  # every val loss was NaN: keep the last state
         best_state, best_epoch = copy.deepcopy(model.state_dict()), len(history)
-    model.load_state_dict(best_state)
+    meta = _write(out, model, best_state, settings, history, best_epoch, best, epochs, finished=True)
+    log("best epoch %d (val %.5f); wrote %s" % (best_epoch, best, out))
+    return meta
+
+
+def _write(out, model, best_state, settings, history, best_epoch, best, epochs, finished) -> dict:
+    """model.pt, model.onnx and training.json of the best state so far: written
+    after every better epoch too, so an interrupted training leaves a model."""
+    snapshot = copy.deepcopy(model)
+    snapshot.load_state_dict(best_state)
+    snapshot.eval()
     torch.save(dict(state_dict=best_state, settings=settings, best_epoch=best_epoch, targets=TARGETS),
                os.path.join(out, "model.pt"))
-    export_onnx(model, os.path.join(out, "model.onnx"), height, width)
-    meta = dict(settings=settings, epochs=history, best_epoch=best_epoch, best_val_loss=best,
-                stopped_early=len(history) < epochs,
+    export_onnx(snapshot, os.path.join(out, "model.onnx"), settings["height"], settings["width"])
+    meta = dict(settings=settings, epochs=history, best_epoch=best_epoch, best_val_loss=best, finished=finished,
+                stopped_early=finished and len(history) < epochs,
                 samples_per_s=(sum(e["train_samples_per_s"] or 0 for e in history) / len(history)),
                 outputs=["model.pt", "model.onnx", "training.json"])
     with open(os.path.join(out, "training.json"), "w") as f:
         json.dump(meta, f, indent=2)
-    log("best epoch %d (val %.5f); wrote %s" % (best_epoch, best, out))
     return meta
 
 
@@ -223,12 +246,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--max-samples", type=int, default=0, help="rows of each labels.csv at most (0: all)")
     p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-minutes", type=float, default=0.0,
+                   help="stop after the epoch that passes this much training time (0: no limit)")
     p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
     a = p.parse_args(argv)
     try:
         train(a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience,
               downscale=a.downscale, goal=a.goal, max_samples=a.max_samples, threads=a.threads,
-              force=a.force, seed=a.seed, log=lambda m: print(m, flush=True))
+              force=a.force, seed=a.seed, max_minutes=a.max_minutes, log=lambda m: print(m, flush=True))
     except TrainError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -1,0 +1,262 @@
+"""Closed-loop evaluation of a driving policy (docs/driving.md, "Closed-loop
+evaluation"): the car drives one lap of every route of the chosen maps
+under the policy, in a lockstep sim4cvd of its own per map, and its
+distance to the ideal path (the right-lane centre of its route, exact:
+sim4cv.driving_dataset.RoutePath) is recorded every frame.
+
+    python3 -m sim4cv.driving evaluate --model OUT/model.onnx --maps test --out DIR
+    python3 -m sim4cv.driving evaluate --policy reference --maps test --out DIR
+
+Policies: `network` (a model.pt of sim4cv.driving_train, run by torch, or a
+model.onnx run by OpenCV's DNN, as the C++ client does) and `reference`
+(the true waypoints of the route: separates the controller's error from
+the network's). Both go through the same controller (sim4cv.driving_control).
+
+A run ends after one lap, when the car is more than OFF_ROAD_M from the
+lane centre (it left the road: `completed` false), or after a time limit.
+"""
+
+import csv
+import json
+import math
+import os
+import time
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from . import driving_control as dc
+from . import driving_labels as dl
+from . import driving_metrics as dm
+from .driving_dataset import CAMERA_SETTINGS, WAYPOINT_COUNT, WAYPOINT_STEP_M, RoutePath, parse_map, resolve_maps
+
+EGO, EGO_CAMERA = "ego", "ego_cam"
+OFF_ROAD_M = 4.0          # beyond the road's right edge or into the far side of the other lane
+DEFAULT_SPEED = 8.0       # m/s, the controller's speed cap
+TIME_MARGIN_S = 30.0      # a run may take lap / (speed / 2) + this before it is stopped
+
+
+class EvalError(RuntimeError):
+    """The evaluation cannot run (a missing or malformed model, no maps); the message says why."""
+
+
+def yaw_of(orientation) -> float:
+    """Heading (rad, counter-clockwise from east) of a (w, x, y, z) quaternion."""
+    w, x, y, z = orientation
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+# ---------------------------------------------------------------------------
+# Policies: waypoints (v1 h1 ... v4 h4, h positive right) from a frame
+
+class ReferencePolicy:
+    """The route's true waypoints 2, 4, 6, 8 m ahead of the car's nearest
+    lane point, encoded for the car's pose: what a perfect network predicts."""
+    name = "reference"
+
+    def waypoints(self, rgb, pose, progress) -> List[float]:
+        x, y, yaw = pose
+        points = [progress.path.point(progress.u + WAYPOINT_STEP_M * k)[:2] for k in range(1, WAYPOINT_COUNT + 1)]
+        return [c for vh in dl.encode(x, y, yaw, points) for c in vh]
+
+
+class NetworkPolicy:
+    """A trained WaypointNet: OUT/model.pt (torch) or OUT/model.onnx (OpenCV
+    DNN). The camera image is shrunk to the model's size (INTER_AREA, as in
+    training). lane="left" mirrors the image and the predicted h (the
+    paper's lane-change trick: the right-lane network drives the left lane)."""
+    name = "network"
+
+    def __init__(self, path: str, goal: float = 0.0, lane: str = "right"):
+        import cv2
+        self.cv2 = cv2
+        self.goal, self.lane = float(goal), lane
+        if not os.path.isfile(path):
+            raise EvalError("model file %s does not exist" % path)
+        if path.endswith(".onnx"):
+            self.height, self.width, self.run = _load_onnx(path)
+        elif path.endswith(".pt"):
+            self.height, self.width, self.run = _load_torch(path)
+        else:
+            raise EvalError("model file %s: expected a .pt (sim4cv.driving_train) or .onnx file" % path)
+
+    def waypoints(self, rgb, pose, progress) -> List[float]:
+        image = rgb
+        if image.shape[0] != self.height or image.shape[1] != self.width:
+            image = self.cv2.resize(image, (self.width, self.height), interpolation=self.cv2.INTER_AREA)
+        if self.lane == "left":
+            image = image[:, ::-1]
+        out = [float(v) for v in self.run(np.ascontiguousarray(image), self.goal)]
+        if self.lane == "left":
+            out = [-v if i % 2 else v for i, v in enumerate(out)]
+        return out
+
+
+def _load_onnx(path: str):
+    from .driving_net import load_onnx_with_opencv
+    try:
+        import onnx
+        model = onnx.load(path)
+        dims = [d.dim_value for d in model.graph.input[0].type.tensor_type.shape.dim]
+        outs = [d.dim_value for d in model.graph.output[0].type.tensor_type.shape.dim]
+    except Exception as e:  # noqa: BLE001 - any parse failure is a bad model file
+        raise EvalError("model file %s is not a readable ONNX model: %s" % (path, e)) from None
+    if len(dims) != 4 or dims[:2] != [1, 3] or outs != [1, 8]:
+        raise EvalError("model file %s: expected input [1, 3, H, W] and output [1, 8] (v1 h1 ... v4 h4), found "
+                        "input %s and output %s" % (path, dims, outs))
+    run = load_onnx_with_opencv(path)
+    return dims[2], dims[3], run
+
+
+def _load_torch(path: str):
+    import torch
+    from .driving_train import load_model
+    try:
+        model = load_model(path)
+    except Exception as e:  # noqa: BLE001
+        raise EvalError("model file %s is not a sim4cv.driving_train model.pt: %s" % (path, e)) from None
+    model.eval()
+    torch.set_grad_enabled(False)
+
+    def run(image, goal):
+        x = torch.from_numpy(image).permute(2, 0, 1).float().unsqueeze(0)
+        g = torch.tensor([[goal]], dtype=torch.float32) if model.use_goal else None
+        return model(x, g)[0].numpy() if g is not None else model(x)[0].numpy()
+    return model.height, model.width, run
+
+
+# ---------------------------------------------------------------------------
+# One route
+
+def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: float, log=print):
+    """Drives one lap of `route` under `policy`; returns (run dict, rows)."""
+    path = RoutePath(info, route)
+    x0, y0, yaw0 = path.point(0.0)
+    ego = client.spawn("car", EGO, x0, y0, 0.0, math.degrees(yaw0))
+    # the camera's height is over the ground, its mount point relative to the body's centre
+    z = next(e.position.z for e in client.get_state().entities if e.id == ego)
+    cam = CAMERA_SETTINGS
+    client.add_camera(EGO_CAMERA, mounted_on=EGO, width=cam["width"], height=cam["height"],
+                      fov_y_deg=cam["fov_y_deg"], pitch_down_deg=cam["pitch_down_deg"], gimbal=True,
+                      offset=(0.0, 0.0, cam["height_m"] - z))
+    client.subscribe(EGO_CAMERA, ["rgb"], "lockstep", with_state=True)
+    progress = dm.Progress(path, 0.0)
+    collisions = dm.Collisions(info["objects"])
+    lap = path.length if path.closed else path.length - WAYPOINT_STEP_M * WAYPOINT_COUNT
+    limit_s = lap / (speed / 2.0) + TIME_MARGIN_S
+    rows, deviations = [], []
+    completed, off_road = False, False
+    frame = client.step_and_receive(timeout=30.0)
+    t0 = frame.sim_time
+    infer_s = 0.0
+    while True:
+        pose = next(e for e in frame.entities if e.id == ego)
+        x, y = pose.position[0], pose.position[1]
+        yaw = yaw_of(pose.orientation)
+        car_speed = math.hypot(pose.linear_velocity[0], pose.linear_velocity[1])
+        deviation = progress.update(x, y)
+        hit = collisions.update(x, y, yaw)
+        deviations.append(deviation)
+        if progress.u >= lap:
+            completed = True
+        elif abs(deviation) > OFF_ROAD_M:
+            off_road = True
+        t = frame.sim_time - t0
+        if completed or off_road or t > limit_s:
+            rows.append([round(t, 4), round(x, 3), round(y, 3), round(math.degrees(yaw), 2), round(progress.u, 3),
+                         round(deviation, 4), round(car_speed, 3), "", "", "", hit])
+            break
+        started = time.perf_counter()
+        w = policy.waypoints(frame.image("rgb"), (x, y, yaw), progress)
+        infer_s += time.perf_counter() - started
+        steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed)
+        client.send_controls(ego, steering, throttle, brake)
+        rows.append([round(t, 4), round(x, 3), round(y, 3), round(math.degrees(yaw), 2), round(progress.u, 3),
+                     round(deviation, 4), round(car_speed, 3), round(steering, 4), round(throttle, 4),
+                     round(brake, 4), hit])
+        frame = client.step_and_receive(timeout=30.0)
+    run = dm.score(deviations, min(progress.u, lap), collisions.count)
+    run.update(completed=completed, left_road=off_road, route=route, lap_m=round(lap, 2),
+               sim_seconds=round(rows[-1][0], 3), policy_ms=round(1000.0 * infer_s / max(len(rows), 1), 3))
+    log("  route %s: %s, %.0f m, mean deviation %.1f cm, within 25 cm %.1f%%, departures %d, collisions %d"
+        % (route, "completed" if completed else ("left the road" if off_road else "timed out"), run["distance_m"],
+           run["mean_deviation_cm"] or 0.0, 100.0 * (run["within_25cm"] or 0.0), run["lane_departures"],
+           run["collisions"]))
+    return run, rows, deviations
+
+
+ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering", "throttle", "brake", "collision"]
+
+
+# ---------------------------------------------------------------------------
+# A whole evaluation
+
+def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, speed: float = DEFAULT_SPEED,
+             conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "") -> dict:
+    """Drives every route of every map; writes out/driving.json, out/runs/*.csv
+    and the plots; returns driving.json's content."""
+    import sim4cv
+    from .daemon import OwnDaemon
+    from . import driving_plots
+
+    resolved = resolve_maps(maps, surroundings)
+    os.makedirs(os.path.join(out, "runs"), exist_ok=True)
+    report = {"settings": {"policy": policy.name, "model": getattr(policy, "path", None), "label": label,
+                           "maps": [p for p, _ in resolved], "speed_m_s": speed, "conditions": conditions or "clear_noon",
+                           "frame_hz": frame_hz, "off_road_m": OFF_ROAD_M,
+                           "lane_departure_m": dm.LANE_DEPARTURE_M},
+              "maps": {}}
+    pooled: Dict[str, List] = {"overall": [], "desert": [], "urban": []}
+    trajectories = {}
+    t_start = time.monotonic()
+    for path, _ in resolved:
+        info = parse_map(path)
+        name = info["name"]
+        log("%s (%s)" % (name, info["surroundings"]))
+        flags = ["--map", path, "--traffic-cars", "0", "--traffic-parked", "0", "--traffic-pedestrians", "0",
+                 "--frame-hz", str(int(frame_hz))]
+        if conditions:
+            flags += ["--conditions", conditions]
+        runs, map_devs = {}, []
+        for route in info["routes"]:
+            # a daemon per route: the ego car and its camera start from a clean world
+            with OwnDaemon(flags, mode="lockstep") as daemon, \
+                    sim4cv.connect(daemon.address, name="driving_eval", timeout=30.0) as client:
+                for entity in client.get_world().entities:
+                    if entity.name in ("car", "uav"):  # the map's own car and the UAV filming it
+                        client.remove(entity.id)
+                run, rows, deviations = drive_route(client, info, route, policy, speed, frame_hz, log)
+            runs[route] = run
+            map_devs.append(deviations)
+            _write_rows(os.path.join(out, "runs", "%s_%s.csv" % (name, route)), rows)
+            trajectories[(name, route)] = (info, route, rows)
+            for key in ("overall", info["surroundings"]):
+                if key in pooled:
+                    pooled[key].append((run, deviations))
+        report["maps"][name] = {"surroundings": info["surroundings"], "routes": runs,
+                                "score": dm.pooled(list(runs.values()), map_devs)}
+    for key, entries in pooled.items():
+        if entries:
+            report[key if key == "overall" else "surroundings_" + key] = dm.pooled(
+                [r for r, _ in entries], [d for _, d in entries])
+    report["histogram"] = {key: dm.cumulative_histogram([v for _, d in entries for v in d])[1]
+                           for key, entries in pooled.items() if entries}
+    report["histogram_edges_m"] = dm.cumulative_histogram([])[0]
+    report["paper"] = dm.PAPER
+    report["seconds"] = round(time.monotonic() - t_start, 1)
+    with open(os.path.join(out, "driving.json"), "w") as f:
+        json.dump(report, f, indent=1)
+    driving_plots.histogram(report, os.path.join(out, "histogram.png"))
+    driving_plots.trajectories(trajectories, os.path.join(out, "trajectories"))
+    o = report.get("overall", {})
+    log("overall: %d runs, %d completed, mean deviation %s cm, within 25 cm %s, departures %d, collisions %d (%.0f s)"
+        % (o.get("runs", 0), o.get("completed", 0), o.get("mean_deviation_cm"), o.get("within_25cm"),
+           o.get("lane_departures", 0), o.get("collisions", 0), report["seconds"]))
+    return report
+
+
+def _write_rows(path: str, rows) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(ROW_COLUMNS)
+        w.writerows(rows)
