@@ -4,6 +4,8 @@
     python3 -m sim4cv.driving train --train DIR --val DIR --out OUT  (sim4cv.driving_train)
     python3 -m sim4cv.driving evaluate --model OUT/model.onnx --maps test --out DIR
     python3 -m sim4cv.driving evaluate --policy reference --maps test --out DIR
+    python3 -m sim4cv.driving drive --model OUT/model.pt --frames shm://NAME --controls udp://H:P
+                                                                     (sim4cv.driving_client)
 """
 
 import argparse
@@ -43,15 +45,49 @@ def evaluate_main(argv: List[str]) -> int:
     return 0
 
 
+def drive_main(argv: List[str]) -> int:
+    from . import driving_client as dcl
+    p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving drive",
+                                description="drive a car with a policy: frames over shm/TCP, controls over UDP")
+    source = p.add_mutually_exclusive_group(required=True)
+    source.add_argument("--model", help="model.pt (torch) or model.onnx (OpenCV DNN)")
+    source.add_argument("--reference", metavar="MAP", help="the reference policy on this map file's route")
+    p.add_argument("--frames", required=True, help="shm://NAME or tcp://HOST:PORT (the camera's frames)")
+    p.add_argument("--controls", help="udp://HOST:PORT (default: the frames connection)")
+    p.add_argument("--car", default="car", help="the car's entity name (default car)")
+    p.add_argument("--camera", default="car_front")
+    p.add_argument("--speed", type=float, default=de.DEFAULT_SPEED)
+    p.add_argument("--lockstep", action="store_true", help="step the world; controls over the frames connection")
+    p.add_argument("--lane", choices=("right", "left"), default="right")
+    p.add_argument("--switch-every", type=float, default=0.0, help="change lanes every S simulated seconds")
+    p.add_argument("--seconds", type=float, default=0.0, help="stop after S simulated seconds (0: never)")
+    p.add_argument("--frames-count", type=int, default=0, help="stop after N frames (0: never)")
+    a = p.parse_args(argv)
+    try:
+        policy = dcl.ReferenceDriver(a.reference) if a.reference else de.NetworkPolicy(a.model)
+        lane = dcl.Lane(a.lane, a.switch_every)
+        if not a.switch_every:  # type left / right on stdin to change lanes
+            lane.listen()
+        result = dcl.drive(a.frames, a.controls, policy, a.car, a.camera, a.speed, a.lockstep, a.seconds,
+                           a.frames_count, lane, log=lambda m: print(m, flush=True))
+    except (de.EvalError, RuntimeError, OSError) as e:
+        print("error: %s" % e, file=sys.stderr)
+        return 2
+    print(result, flush=True)
+    return 0
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    commands = {"generate": "sim4cv.driving_dataset", "train": "sim4cv.driving_train", "evaluate": None}
+    commands = ("generate", "train", "evaluate", "drive")
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2
     command, rest = argv[0], argv[1:]
     if command == "evaluate":
         return evaluate_main(rest)
+    if command == "drive":
+        return drive_main(rest)
     if command == "generate":
         from . import driving_dataset
         return driving_dataset.main(["generate"] + rest)

@@ -5,10 +5,10 @@
         [--max-samples N] [--seed S]
 
 For each map a lockstep sim4cvd of its own (--map, no traffic) renders a
-world-fixed camera "dataset_cam" (320x180, fov 60, 8 degrees down, 1.5 m
-up: the car's first-person view; the map's car and UAV are removed) placed
-on the right-lane centre of every route of the map, tangent to it, and at
-augmented views around it; the labels are the lane points 2, 4, 6, 8 m
+world-fixed camera "dataset_cam" placed where the car's first-person camera
+car_front (CAMERA_SETTINGS) would be for a car standing on the right-lane
+centre of every route of the map, tangent to it, and at augmented views
+around it (the map's car and UAV are removed); the labels are the lane points 2, 4, 6, 8 m
 ahead of the lane pose, encoded for each view (sim4cv.driving_labels).
 """
 
@@ -30,7 +30,13 @@ import numpy as np
 from . import driving_labels as dl
 
 CAMERA = "dataset_cam"
-CAMERA_SETTINGS = {"width": 320, "height": 180, "fov_y_deg": 60.0, "pitch_down_deg": 8.0, "height_m": 1.5}
+# The car's first-person camera, "car_front" of every map scene (server/sim/scene.cpp):
+# 2.35 m ahead of the body's centre (just past the bumper), 0.3 m above it,
+# pitched 5 degrees down. The dataset renders it from a world-fixed camera
+# placed where car_front would be for a car standing at the view's pose.
+CAMERA_SETTINGS = {"name": "car_front", "width": 320, "height": 180, "fov_y_deg": 60.0, "pitch_down_deg": 5.0,
+                   "forward_m": 2.35, "above_body_m": 0.3}
+BODY_HEIGHT_M = 0.8774  # the car's body centre above the ground at rest (when the map has no car to measure)
 WAYPOINT_STEP_M = 2.0
 WAYPOINT_COUNT = 4
 TURN_LOOKAHEAD_M = 2.0
@@ -275,11 +281,16 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
             open(part_path, "w", newline="") as part:
         writer = csv.writer(part)
         world = client.get_world()
+        heights = {e.id: e.position.z for e in client.get_state().entities}
+        body_z = BODY_HEIGHT_M
         for entity in world.entities:
+            if entity.name == "car":
+                body_z = heights[entity.id]  # at rest on its wheels
             if entity.name in ("car", "uav"):  # the map's car (and the UAV filming it) must not be seen
                 client.remove(entity.id)
+        camera_z = body_z + cam["above_body_m"]
         client.add_camera(CAMERA, width=cam["width"], height=cam["height"], fov_y_deg=cam["fov_y_deg"],
-                          pitch_down_deg=cam["pitch_down_deg"], offset=(0.0, 0.0, cam["height_m"]))
+                          pitch_down_deg=cam["pitch_down_deg"], offset=(0.0, 0.0, camera_z))
         client.subscribe(CAMERA, ["rgb"], "lockstep")
         index = 0
         for route in world.routes:
@@ -306,7 +317,8 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
                     counts["junction_turns"] += 1
                 for vx, vy, vyaw, off_m, off_deg in dl.all_views(x, y, yaw, settings["views"], rng,
                                                                  settings["random_views"]):
-                    client.set_camera_pose(CAMERA, vx, vy, cam["height_m"], math.degrees(vyaw),
+                    client.set_camera_pose(CAMERA, vx + cam["forward_m"] * math.cos(vyaw),
+                                           vy + cam["forward_m"] * math.sin(vyaw), camera_z, math.degrees(vyaw),
                                            cam["pitch_down_deg"])
                     frame = client.step_and_receive(timeout=30.0)
                     rel = os.path.join("images", name, "%06d.png" % index)
@@ -339,7 +351,7 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
         "format": FORMAT_VERSION, "maps": [p for p, _ in resolved], "surroundings": list(surroundings),
         "views": views, "random_views": random_views if views == "random" else 0,
         "straight_step": straight_step, "turn_step": turn_step, "max_samples": max_samples, "seed": seed,
-        "camera": dict(CAMERA_SETTINGS, name=CAMERA),
+        "camera": dict(CAMERA_SETTINGS, rendered_by=CAMERA),
         "waypoints": {"count": WAYPOINT_COUNT, "step_m": WAYPOINT_STEP_M},
         "augmentation": {"random_offset_m": dl.RANDOM_OFFSET_M, "random_yaw_deg": dl.RANDOM_YAW_DEG,
                          "fixed_offsets_m": list(dl.FIXED_OFFSETS_M), "fixed_yaws_deg": list(dl.FIXED_YAWS_DEG)},

@@ -133,12 +133,10 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     path = RoutePath(info, route)
     x0, y0, yaw0 = path.point(0.0)
     ego = client.spawn("car", EGO, x0, y0, 0.0, math.degrees(yaw0))
-    # the camera's height is over the ground, its mount point relative to the body's centre
-    z = next(e.position.z for e in client.get_state().entities if e.id == ego)
-    cam = CAMERA_SETTINGS
+    cam = CAMERA_SETTINGS  # the geometry of the map car's car_front, mounted on the ego car
     client.add_camera(EGO_CAMERA, mounted_on=EGO, width=cam["width"], height=cam["height"],
-                      fov_y_deg=cam["fov_y_deg"], pitch_down_deg=cam["pitch_down_deg"], gimbal=True,
-                      offset=(0.0, 0.0, cam["height_m"] - z))
+                      fov_y_deg=cam["fov_y_deg"], pitch_down_deg=cam["pitch_down_deg"],
+                      offset=(cam["forward_m"], 0.0, cam["above_body_m"]))
     client.subscribe(EGO_CAMERA, ["rgb"], "lockstep", with_state=True)
     progress = dm.Progress(path, 0.0)
     collisions = dm.Collisions(info["objects"])
