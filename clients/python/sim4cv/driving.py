@@ -6,6 +6,7 @@
     python3 -m sim4cv.driving evaluate --policy reference --maps test --out DIR
     python3 -m sim4cv.driving drive --model OUT/model.pt --frames shm://NAME --controls udp://H:P
                                                                      (sim4cv.driving_client)
+    python3 -m sim4cv.driving compare --out DIR   (no / fixed / random views: sim4cv.driving_compare)
 """
 
 import argparse
@@ -79,7 +80,7 @@ def drive_main(argv: List[str]) -> int:
 
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    commands = ("generate", "train", "evaluate", "drive")
+    commands = ("generate", "train", "evaluate", "drive", "compare")
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2
@@ -88,6 +89,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         return evaluate_main(rest)
     if command == "drive":
         return drive_main(rest)
+    if command == "compare":
+        from . import driving_compare
+        return driving_compare.main(rest)
     if command == "generate":
         from . import driving_dataset
         return driving_dataset.main(["generate"] + rest)
