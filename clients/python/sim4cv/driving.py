@@ -6,6 +6,7 @@
     python3 -m sim4cv.driving evaluate --policy reference --maps test --out DIR
     python3 -m sim4cv.driving drive --model OUT/model.pt --frames shm://NAME --controls udp://H:P
                                                                      (sim4cv.driving_client)
+    python3 -m sim4cv.driving human --map MAP --out DIR   (keyboard driving, scored: sim4cv.driving_human)
     python3 -m sim4cv.driving compare --out DIR   (no / fixed / random views: sim4cv.driving_compare)
 """
 
@@ -25,7 +26,9 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--surroundings", default="desert,urban")
     p.add_argument("--out", required=True)
     p.add_argument("--speed", type=float, default=de.DEFAULT_SPEED, help="m/s, the controller's cap")
-    p.add_argument("--conditions", default="", help="weather/time-of-day preset of the daemon (default clear_noon)")
+    p.add_argument("--conditions", default="",
+                   help="weather/time-of-day preset (default clear_noon); several, comma-separated: one evaluation "
+                        "each into OUT/PRESET/ and a comparison in OUT/conditions.md")
     p.add_argument("--lane", choices=("right", "left"), default="right",
                    help="left: mirror image and h (the lane-change trick); scored against the right lane")
     p.add_argument("--frame-hz", type=float, default=30.0)
@@ -38,8 +41,12 @@ def evaluate_main(argv: List[str]) -> int:
                 p.error("--policy network needs --model FILE")
             policy = de.NetworkPolicy(a.model, lane=a.lane)
             policy.path = a.model
-        de.evaluate(policy, a.maps, [s for s in a.surroundings.split(",") if s], a.out, a.speed, a.conditions,
-                    a.frame_hz)
+        surroundings = [s for s in a.surroundings.split(",") if s]
+        if "," in a.conditions:
+            de.evaluate_conditions(policy, a.maps, surroundings, a.out, [c for c in a.conditions.split(",") if c],
+                                   a.speed, a.frame_hz)
+        else:
+            de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz)
     except (de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
@@ -78,9 +85,43 @@ def drive_main(argv: List[str]) -> int:
     return 0
 
 
+def human_main(argv: List[str]) -> int:
+    from . import driving_client as dcl
+    from . import driving_human as dh
+    p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving human",
+                                description="drive with the keyboard in an OpenCV window; scored like the network")
+    p.add_argument("--map", required=True, help="the map file (its route is the ideal path)")
+    p.add_argument("--out", required=True, help="folder for driving.json and the trajectory")
+    p.add_argument("--address", help="a running daemon's frames address (tcp:// or shm://); default: start one")
+    p.add_argument("--controls", help="udp://HOST:PORT of that daemon (default: its frames connection)")
+    p.add_argument("--camera", default="car_front", help="car_front (first person) or car_chase")
+    p.add_argument("--name", default="human", help="the driver's name in driving.json")
+    p.add_argument("--seconds", type=float, default=0.0, help="stop after S seconds (default: one lap)")
+    a = p.parse_args(argv)
+    from .daemon import OwnDaemon
+    driver = dh.KeyboardDriver(window="sim4cv: drive with the arrow keys, q to stop")
+    scorer = dh.Scorer(a.map)
+    scorer.driver = driver
+    try:
+        if a.address:
+            dcl.drive(a.address, a.controls, driver, camera=a.camera, seconds=a.seconds, recorder=scorer)
+        else:
+            flags = ["--map", a.map, "--traffic-cars", "0", "--traffic-parked", "0", "--traffic-pedestrians", "0"]
+            with OwnDaemon(flags, mode="realtime") as d:
+                dcl.drive(d.address, "udp://127.0.0.1:%s" % d.fields["udp"], driver, camera=a.camera,
+                          seconds=a.seconds, recorder=scorer)
+    except (de.EvalError, RuntimeError, OSError) as e:
+        print("error: %s" % e, file=sys.stderr)
+        return 2
+    o = scorer.report(a.out, a.name)["overall"]
+    print("%s: mean deviation %s cm, within 25 cm %s, lane departures %d, %.0f m"
+          % (a.name, o["mean_deviation_cm"], o["within_25cm"], o["lane_departures"], o["distance_m"]))
+    return 0
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    commands = ("generate", "train", "evaluate", "drive", "compare")
+    commands = ("generate", "train", "evaluate", "drive", "compare", "human")
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2
@@ -89,6 +130,8 @@ def main(argv: Optional[List[str]] = None) -> int:
         return evaluate_main(rest)
     if command == "drive":
         return drive_main(rest)
+    if command == "human":
+        return human_main(rest)
     if command == "compare":
         from . import driving_compare
         return driving_compare.main(rest)

@@ -95,9 +95,15 @@ def _nearest_u(path: RoutePath, x: float, y: float) -> float:
 
 def drive(frames_address: str, controls_address: Optional[str], policy, car: str = "car",
           camera: str = "car_front", speed: float = de.DEFAULT_SPEED, lockstep: bool = False,
-          seconds: float = 0.0, frames: int = 0, lane: Optional[Lane] = None, log=print) -> dict:
-    """Drives until `seconds` of simulated time or `frames` frames (0: for ever);
-    returns counts: frames, skipped, policy_ms (mean), fps, age_ms (mean frame age at decision)."""
+          seconds: float = 0.0, frames: int = 0, lane: Optional[Lane] = None, log=print, recorder=None) -> dict:
+    """Drives until `seconds` of simulated time or `frames` frames (0: for ever),
+    or until the policy's `done` turns true; returns counts: frames, skipped,
+    policy_ms (mean), fps, age_ms (mean frame age at decision).
+
+    A policy has waypoints(rgb, pose, lane_or_progress) (the controller makes
+    the Controls) or controls(frame, pose, speed) -> (steering, throttle,
+    brake) (e.g. a person at the keyboard). recorder(frame, pose), if given,
+    sees every frame's (x, y, yaw) of the car."""
     import sim4cv
     lane = lane or Lane()
     with sim4cv.connect(frames_address, name="driving_client", timeout=30.0) as source:
@@ -108,13 +114,13 @@ def drive(frames_address: str, controls_address: Optional[str], policy, car: str
                                                                                 timeout=10.0)
         try:
             source.subscribe(camera, ["rgb"], "lockstep" if lockstep else "newest", with_state=True)
-            return _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log)
+            return _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log, recorder)
         finally:
             if sink is not source:
                 sink.close()
 
 
-def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log):
+def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log, recorder):
     counts = {"frames": 0, "skipped": 0, "policy_s": 0.0, "age_ns": 0}
     last_id, t_start, t_report, start_sim = None, time.monotonic(), time.monotonic(), None
     while True:
@@ -129,14 +135,19 @@ def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, 
             raise de.EvalError("the frame's state holds no car %d: was it removed?" % car_id)
         x, y, yaw = pose.position[0], pose.position[1], de.yaw_of(pose.orientation)
         car_speed = math.hypot(pose.linear_velocity[0], pose.linear_velocity[1])
+        if recorder is not None:
+            recorder(frame, (x, y, yaw))
         started = time.perf_counter()
         side = lane.tick(frame.sim_time)
-        if isinstance(policy, ReferenceDriver):
-            w = policy.waypoints(frame.image("rgb"), (x, y, yaw), side)
+        if hasattr(policy, "controls"):
+            steering, throttle, brake = policy.controls(frame, (x, y, yaw), car_speed)
         else:
-            policy.lane = side
-            w = policy.waypoints(frame.image("rgb"), (x, y, yaw), None)
-        steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed)
+            if isinstance(policy, ReferenceDriver):
+                w = policy.waypoints(frame.image("rgb"), (x, y, yaw), side)
+            else:
+                policy.lane = side
+                w = policy.waypoints(frame.image("rgb"), (x, y, yaw), None)
+            steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed)
         counts["policy_s"] += time.perf_counter() - started
         counts["age_ns"] += time.monotonic_ns() - frame.render_end_mono_ns
         sink.send_controls(car_id, steering, throttle, brake)
@@ -147,7 +158,8 @@ def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, 
                 % (counts["frames"], counts["frames"] / (now - t_start),
                    1000 * counts["policy_s"] / counts["frames"], side, car_speed))
             t_report = now
-        if (seconds and frame.sim_time - start_sim >= seconds) or (frames and counts["frames"] >= frames):
+        if (seconds and frame.sim_time - start_sim >= seconds) or (frames and counts["frames"] >= frames) \
+                or getattr(policy, "done", False):
             break
     n = max(counts["frames"], 1)
     return {"frames": counts["frames"], "skipped": counts["skipped"],

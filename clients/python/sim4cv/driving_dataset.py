@@ -276,6 +276,10 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
     counts = {"samples": 0, "images": 0, "junction_turns": 0, "max_lane_error_m": 0.0}
     t0 = time.monotonic()
     flags = ["--map", path, "--traffic-cars", "0", "--traffic-parked", "0", "--traffic-pedestrians", "0"]
+    if settings.get("conditions"):
+        flags += ["--conditions", settings["conditions"]]
+    if settings.get("randomize"):  # domain randomisation: new conditions for every image
+        flags += ["--randomize", str(settings["randomize"] + zlib.crc32(name.encode())), "--randomize-every", "1"]
     with OwnDaemon(flags, mode="lockstep") as daemon, \
             sim4cv.connect(daemon.address, name="driving_dataset", timeout=30.0) as client, \
             open(part_path, "w", newline="") as part:
@@ -342,7 +346,8 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
 
 def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: str = "random",
              random_views: int = dl.DEFAULT_RANDOM_VIEWS, straight_step: Optional[float] = None,
-             turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, log=print) -> dict:
+             turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, conditions: str = "",
+             randomize: int = 0, log=print) -> dict:
     """Generates (or resumes) the dataset in `out`; returns dataset.json's content."""
     if views not in dl.VIEW_MODES:
         raise DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
@@ -351,6 +356,7 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
         "format": FORMAT_VERSION, "maps": [p for p, _ in resolved], "surroundings": list(surroundings),
         "views": views, "random_views": random_views if views == "random" else 0,
         "straight_step": straight_step, "turn_step": turn_step, "max_samples": max_samples, "seed": seed,
+        "conditions": conditions, "randomize": randomize,
         "camera": dict(CAMERA_SETTINGS, rendered_by=CAMERA),
         "waypoints": {"count": WAYPOINT_COUNT, "step_m": WAYPOINT_STEP_M},
         "augmentation": {"random_offset_m": dl.RANDOM_OFFSET_M, "random_yaw_deg": dl.RANDOM_YAW_DEG,
@@ -410,6 +416,10 @@ def main(argv=None) -> int:
     g.add_argument("--turn-step", type=float, default=None, help="metres (default 0.2; val/test 2)")
     g.add_argument("--max-samples", type=int, default=0, help="lane samples per map at most (0: all)")
     g.add_argument("--seed", type=int, default=0)
+    g.add_argument("--conditions", default="", help="weather/time-of-day preset of every image (default clear_noon)")
+    g.add_argument("--randomize", type=int, default=0,
+                   help="domain randomisation: new conditions (preset, hour, exposure, colours) for every image, "
+                        "drawn from this seed (0: off)")
     args = parser.parse_args(argv)
     surroundings = [s for s in args.surroundings.split(",") if s]
     for s in surroundings:
@@ -420,7 +430,7 @@ def main(argv=None) -> int:
             parser.error("steps must be positive")
     try:
         generate(args.maps, surroundings, args.out, args.views, args.random_views, args.straight_step,
-                 args.turn_step, args.max_samples, args.seed)
+                 args.turn_step, args.max_samples, args.seed, args.conditions, args.randomize)
     except DatasetError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -258,3 +258,33 @@ def _write_rows(path: str, rows) -> None:
         w = csv.writer(f)
         w.writerow(ROW_COLUMNS)
         w.writerows(rows)
+
+
+def evaluate_conditions(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
+                        presets: Sequence[str], speed: float = DEFAULT_SPEED, frame_hz: float = 30.0,
+                        log=print) -> dict:
+    """The same evaluation under each weather/time-of-day preset, into
+    out/<preset>/; out/conditions.json and out/conditions.md compare them
+    (how far the score falls out of the training distribution)."""
+    rows = {}
+    for preset in presets:
+        log("== conditions %s" % preset)
+        report = evaluate(policy, maps, surroundings, os.path.join(out, preset), speed, preset, frame_hz, log)
+        rows[preset] = {key: report.get(key) for key in ("overall", "surroundings_desert", "surroundings_urban")}
+    with open(os.path.join(out, "conditions.json"), "w") as f:
+        json.dump({"presets": rows, "model": getattr(policy, "path", None), "policy": policy.name}, f, indent=1)
+    lines = ["| conditions | laps completed | mean deviation (cm) | within 25 cm | within 1 m | lane departures |",
+             "|---|---|---|---|---|---|"]
+    for preset, r in rows.items():
+        o = r["overall"]
+        lines.append("| %s | %d/%d | %s | %s | %s | %d |" % (
+            preset, o["completed"], o["runs"], _fmt(o["mean_deviation_cm"], "%.2f"), _fmt(o["within_25cm"], "%.3f"),
+            _fmt(o["within_1m"], "%.3f"), o["lane_departures"]))
+    with open(os.path.join(out, "conditions.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    log("\n".join(lines))
+    return rows
+
+
+def _fmt(value, pattern: str) -> str:
+    return "–" if value is None else pattern % value
