@@ -32,6 +32,9 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--lane", choices=("right", "left"), default="right",
                    help="left: mirror image and h (the lane-change trick); scored against the right lane")
     p.add_argument("--frame-hz", type=float, default=30.0)
+    p.add_argument("--obstacles", type=int, default=0,
+                   help="cars parked in the lane per route, placed as the dataset places them (with --seed)")
+    p.add_argument("--seed", type=int, default=0)
     a = p.parse_args(argv)
     try:
         if a.policy == "reference":
@@ -46,7 +49,8 @@ def evaluate_main(argv: List[str]) -> int:
             de.evaluate_conditions(policy, a.maps, surroundings, a.out, [c for c in a.conditions.split(",") if c],
                                    a.speed, a.frame_hz)
         else:
-            de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz)
+            de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz,
+                        obstacles=a.obstacles, seed=a.seed)
     except (de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

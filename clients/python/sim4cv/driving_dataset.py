@@ -28,6 +28,7 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 
 from . import driving_labels as dl
+from . import driving_obstacles as dob
 
 CAMERA = "dataset_cam"
 # The car's first-person camera, "car_front" of every map scene (server/sim/scene.cpp):
@@ -259,8 +260,10 @@ def _rebuild_labels(out: str, meta: dict) -> None:
 # ---------------------------------------------------------------------------
 # Generating one map
 
-def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -> dict:
-    """Renders and labels one map into out/images/<name>/ and out/parts/<name>.csv."""
+def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, goal_fn=None) -> dict:
+    """Renders and labels one map into out/images/<name>/ and out/parts/<name>.csv.
+    goal_fn(route, u, sample) -> -1|0|1, if given, sets the goal column of each lane
+    pose's images (guided driving, sim4cv.driving_guided); without it the goal is 0."""
     import cv2
     import sim4cv
     from .daemon import OwnDaemon
@@ -273,7 +276,7 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
     img_dir = os.path.join(out, "images", name)
     os.makedirs(img_dir)
     part_path = os.path.join(out, "parts", name + ".csv")
-    counts = {"samples": 0, "images": 0, "junction_turns": 0, "max_lane_error_m": 0.0}
+    counts = {"samples": 0, "images": 0, "junction_turns": 0, "max_lane_error_m": 0.0, "obstacles": 0}
     t0 = time.monotonic()
     flags = ["--map", path, "--traffic-cars", "0", "--traffic-parked", "0", "--traffic-pedestrians", "0"]
     if settings.get("conditions"):
@@ -301,24 +304,34 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
             if route not in info["routes"]:
                 raise DatasetError("%s: route %r of the daemon's WorldInfo is not in the map file" % (path, route))
             lane = RoutePath(info, route)
+            # cars parked in the lane; the ideal path passes them in the left lane
+            ideal = dob.ShiftedPath(lane, dob.place(lane, settings.get("obstacles", 0), settings["seed"], name))
+            for ox, oy, oyaw in ideal.obstacle_poses():
+                client.spawn("car", dob.OBSTACLE_NAME % counts["obstacles"], ox, oy, 0.0, math.degrees(oyaw))
+                counts["obstacles"] += 1
             for u in lane_samples(lane, straight_step, turn_step):
                 if settings["max_samples"] and counts["samples"] >= settings["max_samples"]:
                     break
-                x, y, yaw = lane.point(u)
-                geometric = [lane.point(u + WAYPOINT_STEP_M * k)[:2] for k in range(1, WAYPOINT_COUNT + 1)]
-                road = client.query_road(x, y, count=WAYPOINT_COUNT, step=WAYPOINT_STEP_M,
-                                         heading_deg=math.degrees(yaw))
+                x, y, yaw = ideal.point(u)
+                geometric = [ideal.point(u + WAYPOINT_STEP_M * k)[:2] for k in range(1, WAYPOINT_COUNT + 1)]
+                lx, ly, lyaw = lane.point(u)
+                road = client.query_road(lx, ly, count=WAYPOINT_COUNT, step=WAYPOINT_STEP_M,
+                                         heading_deg=math.degrees(lyaw))
                 counts["max_lane_error_m"] = max(counts["max_lane_error_m"], road.distance)
                 if road.distance > 0.25:
                     raise DatasetError("%s route %r at %.1f m: the lane geometry is %.2f m off the daemon's lane"
                                        % (name, route, u, road.distance))
                 queried = [(p.position.x, p.position.y) for p in road.ahead]
-                if len(queried) == WAYPOINT_COUNT and all(
+                if any(dob.shift(u + WAYPOINT_STEP_M * k, ideal.obstacles, lane)[0] > 0
+                       for k in range(WAYPOINT_COUNT + 1)):
+                    waypoints = geometric  # passing an obstacle: off the daemon's lane on purpose
+                elif len(queried) == WAYPOINT_COUNT and all(
                         math.hypot(a[0] - b[0], a[1] - b[1]) < 0.05 for a, b in zip(queried, geometric)):
                     waypoints = queried
                 else:  # QueryRoad goes straight on at a junction where the route turns
                     waypoints = geometric
                     counts["junction_turns"] += 1
+                goal = int(goal_fn(route, u, counts["samples"])) if goal_fn is not None else 0
                 for vx, vy, vyaw, off_m, off_deg in dl.all_views(x, y, yaw, settings["views"], rng,
                                                                  settings["random_views"]):
                     client.set_camera_pose(CAMERA, vx + cam["forward_m"] * math.cos(vyaw),
@@ -332,7 +345,7 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
                     writer.writerow([rel, name, info["surroundings"], route, counts["samples"],
                                      "%.4f" % vx, "%.4f" % vy, "%.4f" % math.degrees(vyaw),
                                      "%.4f" % off_m, "%.4f" % off_deg]
-                                    + ["%.4f" % c for vh in labels for c in vh] + [0])
+                                    + ["%.4f" % c for vh in labels for c in vh] + [goal])
                     index += 1
                     counts["images"] += 1
                 counts["samples"] += 1
@@ -347,7 +360,7 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print) -
 def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: str = "random",
              random_views: int = dl.DEFAULT_RANDOM_VIEWS, straight_step: Optional[float] = None,
              turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, conditions: str = "",
-             randomize: int = 0, log=print) -> dict:
+             randomize: int = 0, obstacles: int = 0, log=print) -> dict:
     """Generates (or resumes) the dataset in `out`; returns dataset.json's content."""
     if views not in dl.VIEW_MODES:
         raise DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
@@ -356,7 +369,7 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
         "format": FORMAT_VERSION, "maps": [p for p, _ in resolved], "surroundings": list(surroundings),
         "views": views, "random_views": random_views if views == "random" else 0,
         "straight_step": straight_step, "turn_step": turn_step, "max_samples": max_samples, "seed": seed,
-        "conditions": conditions, "randomize": randomize,
+        "conditions": conditions, "randomize": randomize, "obstacles": obstacles,
         "camera": dict(CAMERA_SETTINGS, rendered_by=CAMERA),
         "waypoints": {"count": WAYPOINT_COUNT, "step_m": WAYPOINT_STEP_M},
         "augmentation": {"random_offset_m": dl.RANDOM_OFFSET_M, "random_yaw_deg": dl.RANDOM_YAW_DEG,
@@ -420,6 +433,9 @@ def main(argv=None) -> int:
     g.add_argument("--randomize", type=int, default=0,
                    help="domain randomisation: new conditions (preset, hour, exposure, colours) for every image, "
                         "drawn from this seed (0: off)")
+    g.add_argument("--obstacles", type=int, default=0,
+                   help="cars parked in the right lane per route, on straights; the labels pass them in the "
+                        "left lane (default 0)")
     args = parser.parse_args(argv)
     surroundings = [s for s in args.surroundings.split(",") if s]
     for s in surroundings:
@@ -430,7 +446,8 @@ def main(argv=None) -> int:
             parser.error("steps must be positive")
     try:
         generate(args.maps, surroundings, args.out, args.views, args.random_views, args.straight_step,
-                 args.turn_step, args.max_samples, args.seed, args.conditions, args.randomize)
+                 args.turn_step, args.max_samples, args.seed, args.conditions, args.randomize,
+                 args.obstacles)
     except DatasetError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -28,6 +28,7 @@ import numpy as np
 from . import driving_control as dc
 from . import driving_labels as dl
 from . import driving_metrics as dm
+from . import driving_obstacles as dob
 from .driving_dataset import CAMERA_SETTINGS, WAYPOINT_COUNT, WAYPOINT_STEP_M, RoutePath, parse_map, resolve_maps
 
 EGO, EGO_CAMERA = "ego", "ego_cam"
@@ -128,9 +129,16 @@ def _load_torch(path: str):
 # ---------------------------------------------------------------------------
 # One route
 
-def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: float, log=print):
-    """Drives one lap of `route` under `policy`; returns (run dict, rows)."""
-    path = RoutePath(info, route)
+def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: float, log=print,
+                obstacles: int = 0, seed: int = 0):
+    """Drives one lap of `route` under `policy` (with `obstacles` parked cars
+    to pass, placed as the dataset places them); returns (run dict, rows, deviations)."""
+    lane = RoutePath(info, route)
+    path = dob.ShiftedPath(lane, dob.place(lane, obstacles, seed, info["name"]))
+    parked = []
+    for k, (ox, oy, oyaw) in enumerate(path.obstacle_poses()):
+        client.spawn("car", dob.OBSTACLE_NAME % k, ox, oy, 0.0, math.degrees(oyaw))
+        parked.append(("car", ox, oy, math.degrees(oyaw)))
     x0, y0, yaw0 = path.point(0.0)
     ego = client.spawn("car", EGO, x0, y0, 0.0, math.degrees(yaw0))
     cam = CAMERA_SETTINGS  # the geometry of the map car's car_front, mounted on the ego car
@@ -138,8 +146,8 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
                       fov_y_deg=cam["fov_y_deg"], pitch_down_deg=cam["pitch_down_deg"],
                       offset=(cam["forward_m"], 0.0, cam["above_body_m"]))
     client.subscribe(EGO_CAMERA, ["rgb"], "lockstep", with_state=True)
-    progress = dm.Progress(path, 0.0)
-    collisions = dm.Collisions(info["objects"])
+    progress = dm.Progress(path, 0.0)  # u along the route; its points are the ideal path's
+    collisions = dm.Collisions(info["objects"] + parked)
     lap = path.length if path.closed else path.length - WAYPOINT_STEP_M * WAYPOINT_COUNT
     limit_s = lap / (speed / 2.0) + TIME_MARGIN_S
     rows, deviations = [], []
@@ -152,7 +160,8 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
         x, y = pose.position[0], pose.position[1]
         yaw = yaw_of(pose.orientation)
         car_speed = math.hypot(pose.linear_velocity[0], pose.linear_velocity[1])
-        deviation = progress.update(x, y)
+        lane_deviation = progress.update(x, y)
+        deviation = path.deviation(progress.u, lane_deviation)
         hit = collisions.update(x, y, yaw)
         deviations.append(deviation)
         if progress.u >= lap:
@@ -174,13 +183,13 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
                      round(brake, 4), hit])
         frame = client.step_and_receive(timeout=30.0)
     run = dm.score(deviations, min(progress.u, lap), collisions.count)
-    run.update(completed=completed, left_road=off_road, route=route, lap_m=round(lap, 2),
+    run.update(completed=completed, left_road=off_road, route=route, lap_m=round(lap, 2), obstacles=len(parked),
                sim_seconds=round(rows[-1][0], 3), policy_ms=round(1000.0 * infer_s / max(len(rows), 1), 3))
     log("  route %s: %s, %.0f m, mean deviation %.1f cm, within 25 cm %.1f%%, departures %d, collisions %d"
         % (route, "completed" if completed else ("left the road" if off_road else "timed out"), run["distance_m"],
            run["mean_deviation_cm"] or 0.0, 100.0 * (run["within_25cm"] or 0.0), run["lane_departures"],
            run["collisions"]))
-    return run, rows, deviations
+    return run, rows, deviations, path
 
 
 ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering", "throttle", "brake", "collision"]
@@ -190,7 +199,8 @@ ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering"
 # A whole evaluation
 
 def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, speed: float = DEFAULT_SPEED,
-             conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "") -> dict:
+             conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "", obstacles: int = 0,
+             seed: int = 0) -> dict:
     """Drives every route of every map; writes out/driving.json, out/runs/*.csv
     and the plots; returns driving.json's content."""
     import sim4cv
@@ -202,7 +212,7 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
     report = {"settings": {"policy": policy.name, "model": getattr(policy, "path", None), "label": label,
                            "maps": [p for p, _ in resolved], "speed_m_s": speed, "conditions": conditions or "clear_noon",
                            "frame_hz": frame_hz, "off_road_m": OFF_ROAD_M,
-                           "lane_departure_m": dm.LANE_DEPARTURE_M},
+                           "lane_departure_m": dm.LANE_DEPARTURE_M, "obstacles": obstacles, "seed": seed},
               "maps": {}}
     pooled: Dict[str, List] = {"overall": [], "desert": [], "urban": []}
     trajectories = {}
@@ -223,11 +233,12 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
                 for entity in client.get_world().entities:
                     if entity.name in ("car", "uav"):  # the map's own car and the UAV filming it
                         client.remove(entity.id)
-                run, rows, deviations = drive_route(client, info, route, policy, speed, frame_hz, log)
+                run, rows, deviations, ideal = drive_route(client, info, route, policy, speed, frame_hz, log,
+                                                           obstacles, seed)
             runs[route] = run
             map_devs.append(deviations)
             _write_rows(os.path.join(out, "runs", "%s_%s.csv" % (name, route)), rows)
-            trajectories[(name, route)] = (info, route, rows)
+            trajectories[(name, route)] = (ideal, route, rows)
             for key in ("overall", info["surroundings"]):
                 if key in pooled:
                     pooled[key].append((run, deviations))

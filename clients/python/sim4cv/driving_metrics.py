@@ -176,11 +176,11 @@ def first_index_beyond(values: Sequence[float], limit: float) -> Optional[int]:
 # Collisions with the map's objects, geometrically (the daemon reports no
 # contacts): the car's footprint (CarParams' chassis, 4.5 x 1.8 m) against
 # each object's footprint (server/sim/map/map.cpp ShapeOf: houses and
-# obstacles as rectangles, tree trunks and lanterns as discs; parks are flat
+# obstacles as rectangles, cars parked as obstacles as their chassis, tree trunks and lanterns as discs; parks are flat
 # and never hit). Each entry into contact with an object counts once.
 
 CAR_HALF_LENGTH_M, CAR_HALF_WIDTH_M = 2.25, 0.9
-OBJECT_SHAPES = {"house": ("box", 5.0, 4.0), "obstacle": ("box", 1.0, 0.5),
+OBJECT_SHAPES = {"house": ("box", 5.0, 4.0), "obstacle": ("box", 1.0, 0.5), "car": ("box", 2.25, 0.9),
                  "tree": ("disc", 0.3), "lantern": ("disc", 0.15)}
 
 

@@ -10,7 +10,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .driving_dataset import RoutePath  # noqa: E402
 
 
 def histogram(report: dict, path: str, title: str = "") -> None:
@@ -33,16 +32,18 @@ def histogram(report: dict, path: str, title: str = "") -> None:
 
 def trajectories(runs: dict, folder: str) -> None:
     """One PNG per map: the ideal path (grey) and the car's trajectory
-    (coloured by deviation). runs: {(map, route): (map_info, route, rows)}."""
+    (coloured by deviation) and any obstacles (red). runs: {(map, route):
+    (ideal path (driving_obstacles.ShiftedPath), route, rows)}."""
     os.makedirs(folder, exist_ok=True)
     by_map = {}
     for (name, route), entry in runs.items():
         by_map.setdefault(name, []).append(entry)
     for name, entries in by_map.items():
         fig, ax = plt.subplots(figsize=(6.0, 6.0))
-        for info, route, rows in entries:
-            lane = RoutePath(info, route)
-            ideal = [lane.point(0.5 * i)[:2] for i in range(int(lane.length / 0.5) + 1)]
+        for path, route, rows in entries:
+            ideal = [path.point(0.5 * i)[:2] for i in range(int(path.length / 0.5) + 1)]
+            for ox, oy, _ in path.obstacle_poses():
+                ax.plot([ox], [oy], "s", color="red", ms=5, zorder=4)
             ax.plot([p[0] for p in ideal], [p[1] for p in ideal], color="0.7", lw=3, label="ideal path (%s)" % route)
             sc = ax.scatter([r[1] for r in rows], [r[2] for r in rows], c=[abs(r[5]) * 100 for r in rows], s=2,
                             cmap="viridis", vmin=0, vmax=100, zorder=3)
