@@ -27,7 +27,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 import torch
-from torch.utils.data import DataLoader, Dataset
+from torch.utils.data import ConcatDataset, DataLoader, Dataset
 
 from sim4cv.driving_net import DEFAULT_HEIGHT, DEFAULT_WIDTH, WaypointNet, export_onnx
 
@@ -130,17 +130,22 @@ def _check_out(out: str, settings: dict, force: bool) -> None:
                          % (out, ", ".join("%s: %r -> %r" % (k, old.get(k), settings.get(k)) for k in differ)))
 
 
-def train(train_dir: str, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
+def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
           patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
           threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
     if epochs < 1 or batch < 1 or lr <= 0:
         raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
-    settings = dict(train=os.path.abspath(train_dir), val=os.path.abspath(val_dir), epochs=epochs, batch=batch,
+    train_dirs = [train_dir] if isinstance(train_dir, str) else list(train_dir)
+    train_path = (os.path.abspath(train_dirs[0]) if len(train_dirs) == 1
+                  else [os.path.abspath(d) for d in train_dirs])
+    settings = dict(train=train_path, val=os.path.abspath(val_dir), epochs=epochs, batch=batch,
                     lr=lr, patience=patience, downscale=downscale, goal=goal, max_samples=max_samples,
                     threads=threads, seed=seed)
-    train_set = DrivingDataset(train_dir, downscale, max_samples)
+    parts = [DrivingDataset(d, downscale, max_samples) for d in train_dirs]
+    train_set = parts[0] if len(parts) == 1 else ConcatDataset(parts)
+    train_set.height, train_set.width = parts[0].height, parts[0].width
     val_set = DrivingDataset(val_dir, downscale, max_samples)
     _check_out(out, settings, force)
     try:
@@ -161,7 +166,7 @@ def train(train_dir: str, val_dir: str, out: str, epochs: int = 50, batch: int =
 
     history, best, best_epoch, best_state, waited = [], math.inf, 0, None, 0
     log("training on %d samples (%s), validating on %d, %dx%d, %d epochs at most"
-        % (len(train_set), train_dir, len(val_set), height, width, epochs))
+        % (len(train_set), ", ".join(train_dirs), len(val_set), height, width, epochs))
     for epoch in range(1, epochs + 1):
         t0 = time.time()
         model.train()
@@ -234,7 +239,7 @@ def load_model(path: str) -> WaypointNet:
 
 def main(argv: Optional[List[str]] = None) -> int:
     p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving_train", description=__doc__.split("\n\n")[0])
-    p.add_argument("--train", required=True, help="training dataset folder (holds labels.csv)")
+    p.add_argument("--train", required=True, nargs="+", help="training dataset folder(s) (each holds labels.csv)")
     p.add_argument("--val", required=True, help="validation dataset folder (holds labels.csv)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--epochs", type=int, default=50)
