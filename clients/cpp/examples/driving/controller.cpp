@@ -1,0 +1,55 @@
+#include "driving/controller.h"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+namespace sim4cv::driving {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Python's min(a, b) and max(a, b): the first argument unless the second is
+// strictly smaller (larger). With a NaN these return the bound where
+// std::clamp would return the NaN, so the clamps match driving_control.py's
+// `max(lo, min(hi, x))` for every input.
+double PyMin(double a, double b) { return b < a ? b : a; }
+double PyMax(double a, double b) { return b > a ? b : a; }
+
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+}  // namespace
+
+Controller::Controller(ControllerParams params) : params_(params) {
+  if (params_.max_steering_deg <= 0) {
+    throw std::invalid_argument("Controller: max_steering_deg must be positive, got " +
+                                Number(params_.max_steering_deg));
+  }
+  if (!(0 <= params_.t_min && params_.t_min <= params_.t_max && params_.t_max <= 1)) {
+    throw std::invalid_argument("Controller: need 0 <= t_min <= t_max <= 1, got " + Number(params_.t_min) + ", " +
+                                Number(params_.t_max));
+  }
+}
+
+double Controller::Steering(double v1, double h1) const {
+  if (v1 <= 0) return static_cast<double>((h1 > 0) - (h1 < 0));
+  const double steering = params_.gain * std::atan2(h1, v1) / (params_.max_steering_deg * kPi / 180.0);
+  return PyMax(-1.0, PyMin(1.0, steering));
+}
+
+double Controller::Throttle(double h4, std::optional<double> speed, std::optional<double> max_speed) const {
+  if (speed && max_speed && *speed >= *max_speed) return 0.0;
+  return PyMax(params_.t_min, PyMin(params_.t_max, params_.t_max - params_.k * std::fabs(h4)));
+}
+
+DriveControls Controller::FromWaypoints(const Waypoints& w, std::optional<double> speed,
+                                        std::optional<double> max_speed) const {
+  return {Steering(w[0], w[1]), Throttle(w[7], speed, max_speed), 0.0};
+}
+
+}  // namespace sim4cv::driving
