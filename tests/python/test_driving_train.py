@@ -76,3 +76,19 @@ def test_refusals(dataset, tmp_path):
     assert dt.main(["--train", str(bad), "--val", str(dataset), "--out", str(tmp_path / "o")]) == 2
     with pytest.raises(dt.TrainError, match="missing columns: v2"):
         dt.read_labels(str(bad))
+
+
+def test_training_goes_on_from_a_model_and_refuses_another_size(dataset, tmp_path):
+    first = tmp_path / "first"
+    dt.train(str(dataset), str(dataset), str(first), epochs=1, batch=8, downscale=2, threads=2, log=lambda *a: None)
+    start = dt.load_model(str(first / "model.pt"))
+    # lr tiny: one more epoch from the first model's weights keeps them close to where they started
+    meta = dt.train(str(dataset), str(dataset), str(tmp_path / "second"), epochs=1, batch=8, lr=1e-12, downscale=2,
+                    threads=2, init=str(first / "model.pt"), log=lambda *a: None)
+    assert meta["settings"]["init"] == str(first / "model.pt")
+    second = dt.load_model(str(tmp_path / "second" / "model.pt"))
+    for a, b in zip(start.state_dict().values(), second.state_dict().values()):
+        assert torch.allclose(a, b, atol=1e-6)
+    with pytest.raises(dt.TrainError, match=r"--init .* was trained at 90x160 goal=False, not 180x320 goal=False"):
+        dt.train(str(dataset), str(dataset), str(tmp_path / "third"), epochs=1, downscale=1,
+                 init=str(first / "model.pt"), log=lambda *a: None)

@@ -132,7 +132,8 @@ def _check_out(out: str, settings: dict, force: bool) -> None:
 
 def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
           patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
-          threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, log=print) -> dict:
+          threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, init: str = "",
+          log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
     if epochs < 1 or batch < 1 or lr <= 0:
@@ -158,6 +159,16 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
     height, width = train_set.height, train_set.width
     settings.update(height=height, width=width, train_samples=len(train_set), val_samples=len(val_set))
     model = WaypointNet(height, width, use_goal=goal)
+    if init:  # go on from a trained model (e.g. one whose time budget ran out)
+        try:
+            start = load_model(init)
+        except (OSError, KeyError, RuntimeError) as e:
+            raise TrainError("--init %s: not a model.pt of this trainer (%s)" % (init, e))
+        if (start.height, start.width, start.use_goal) != (height, width, goal):
+            raise TrainError("--init %s was trained at %dx%d goal=%s, not %dx%d goal=%s" % (
+                init, start.height, start.width, start.use_goal, height, width, goal))
+        model.load_state_dict(start.state_dict())
+        settings["init"] = os.path.abspath(init)
     opt = torch.optim.Adam(model.parameters(), lr=lr)
     gen = torch.Generator()
     gen.manual_seed(seed)
@@ -253,12 +264,13 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-minutes", type=float, default=0.0,
                    help="stop after the epoch that passes this much training time (0: no limit)")
+    p.add_argument("--init", default="", help="start from this model.pt's weights instead of random ones")
     p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
     a = p.parse_args(argv)
     try:
         train(a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience,
               downscale=a.downscale, goal=a.goal, max_samples=a.max_samples, threads=a.threads,
-              force=a.force, seed=a.seed, max_minutes=a.max_minutes, log=lambda m: print(m, flush=True))
+              force=a.force, seed=a.seed, max_minutes=a.max_minutes, init=a.init, log=lambda m: print(m, flush=True))
     except TrainError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
