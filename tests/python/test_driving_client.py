@@ -27,7 +27,7 @@ def car_deviation(address):
     path = dd.RoutePath(info, next(iter(info["routes"])))
     with sim4cv.connect(address) as c:
         p = next(e.position for e in c.get_state().entities if e.name == "car")
-    u = dcl._nearest_u(path, p.x, p.y)
+    u = dm.nearest_u(path, p.x, p.y)
     progress = dm.Progress(path, u)
     return progress.update(p.x, p.y), p
 

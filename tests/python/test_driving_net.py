@@ -161,3 +161,12 @@ def test_bad_arguments():
         dc.steering_from_waypoint(2, 0, max_steering_deg=0)
     with pytest.raises(ValueError):
         dc.throttle_from_waypoint(0, t_min=0.8, t_max=0.5)
+
+
+def test_the_steering_may_aim_at_a_farther_waypoint():
+    w = [2.0, 0.5, 4.0, 2.0, 6.0, 0.0, 8.0, 0.0]
+    assert dc.controls_from_waypoints(w)[0] == pytest.approx(math.degrees(math.atan(0.25)) / 35.0)
+    assert dc.controls_from_waypoints(w, steer_waypoint=2)[0] == pytest.approx(math.degrees(math.atan(0.5)) / 35.0)
+    assert dc.controls_from_waypoints(w, steer_waypoint=3)[0] == 0.0
+    with pytest.raises(ValueError, match="steer_waypoint must be 1 ... 4, got 5"):
+        dc.controls_from_waypoints(w, steer_waypoint=5)

@@ -92,3 +92,16 @@ def test_training_goes_on_from_a_model_and_refuses_another_size(dataset, tmp_pat
     with pytest.raises(dt.TrainError, match=r"--init .* was trained at 90x160 goal=False, not 180x320 goal=False"):
         dt.train(str(dataset), str(dataset), str(tmp_path / "third"), epochs=1, downscale=1,
                  init=str(first / "model.pt"), log=lambda *a: None)
+
+
+def test_a_goal_model_starts_from_a_lane_model_with_the_same_outputs(dataset, tmp_path):
+    first = tmp_path / "first"
+    dt.train(str(dataset), str(dataset), str(first), epochs=1, batch=8, downscale=2, threads=2, log=lambda *a: None)
+    dt.train(str(dataset), str(dataset), str(tmp_path / "goal"), epochs=1, batch=8, lr=1e-12, downscale=2,
+             threads=2, goal=True, init=str(first / "model.pt"), log=lambda *a: None)
+    lane, guided = dt.load_model(str(first / "model.pt")), dt.load_model(str(tmp_path / "goal" / "model.pt"))
+    image = torch.rand(2, 3, 90, 160) * 255
+    assert torch.allclose(lane(image), guided(image, torch.tensor([[1.0], [-1.0]])), atol=1e-4)
+    with pytest.raises(dt.TrainError, match="goal=True, not 90x160 goal=False"):
+        dt.train(str(dataset), str(dataset), str(tmp_path / "back"), epochs=1, downscale=2,
+                 init=str(tmp_path / "goal" / "model.pt"), log=lambda *a: None)

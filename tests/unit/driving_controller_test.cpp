@@ -112,3 +112,18 @@ TEST(DrivingController, BadParametersAreRefusedNamingThem) {
 
 }  // namespace
 }  // namespace sim4cv::driving
+
+TEST(DrivingControllerTest, SteeringMayAimAtAFartherWaypoint) {
+  sim4cv::driving::ControllerParams params;
+  params.steer_waypoint = 2;
+  const sim4cv::driving::Controller controller(params);
+  const sim4cv::driving::Waypoints w{2.0f, 0.5f, 4.0f, 2.0f, 6.0f, 0.0f, 8.0f, 0.0f};
+  EXPECT_NEAR(controller.FromWaypoints(w).steering, std::atan(0.5) * 180.0 / 3.14159265358979 / 35.0, 1e-6);
+  params.steer_waypoint = 5;
+  try {
+    sim4cv::driving::Controller bad(params);
+    FAIL() << "steer_waypoint 5 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "Controller: steer_waypoint must be 1 ... 4, got 5");
+  }
+}

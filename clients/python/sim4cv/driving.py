@@ -7,6 +7,7 @@
     python3 -m sim4cv.driving drive --model OUT/model.pt --frames shm://NAME --controls udp://H:P
                                                                      (sim4cv.driving_client)
     python3 -m sim4cv.driving human --map MAP --out DIR   (keyboard driving, scored: sim4cv.driving_human)
+    python3 -m sim4cv.driving relabel --dataset DIR   (goals at junctions: sim4cv.driving_relabel)
     python3 -m sim4cv.driving compare --out DIR   (no / fixed / random views: sim4cv.driving_compare)
 """
 
@@ -35,6 +36,8 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--obstacles", type=int, default=0,
                    help="cars parked in the lane per route, placed as the dataset places them (with --seed)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--steer-waypoint", type=int, default=1, choices=(1, 2, 3, 4),
+                   help="the waypoint the steering aims at (1: the paper's rule)")
     a = p.parse_args(argv)
     try:
         if a.policy == "reference":
@@ -50,7 +53,7 @@ def evaluate_main(argv: List[str]) -> int:
                                    a.speed, a.frame_hz)
         else:
             de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz,
-                        obstacles=a.obstacles, seed=a.seed)
+                        obstacles=a.obstacles, seed=a.seed, steer_waypoint=a.steer_waypoint)
     except (de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
@@ -125,7 +128,7 @@ def human_main(argv: List[str]) -> int:
 
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    commands = ("generate", "train", "evaluate", "drive", "compare", "human")
+    commands = ("generate", "train", "evaluate", "drive", "compare", "human", "relabel")
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2
@@ -134,6 +137,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         return evaluate_main(rest)
     if command == "drive":
         return drive_main(rest)
+    if command == "relabel":
+        from . import driving_relabel
+        return driving_relabel.main(rest)
     if command == "human":
         return human_main(rest)
     if command == "compare":

@@ -74,7 +74,7 @@ class ReferenceDriver:
 
     def waypoints(self, rgb, pose, lane: str):
         if self.progress is None:
-            self.progress = dm.Progress(self.path, _nearest_u(self.path, pose[0], pose[1]))
+            self.progress = dm.Progress(self.path, dm.nearest_u(self.path, pose[0], pose[1]))
         deviation = self.progress.update(pose[0], pose[1])
         w = self.policy.waypoints(rgb, pose, self.progress)
         # the left lane's centre is 4 m left of the right lane's; the aim moves
@@ -85,12 +85,6 @@ class ReferenceDriver:
         step = self.LANE_SHIFT_PER_CALL_M
         self.shift += min(max(target - self.shift, -step), step)
         return [v if i % 2 == 0 else v - self.shift for i, v in enumerate(w)]
-
-
-def _nearest_u(path: RoutePath, x: float, y: float) -> float:
-    best = min(((dm.signed_distance_to_segment(x, y, seg), seg[0]) for seg in path.segments),
-               key=lambda item: abs(item[0][1]))
-    return best[1] + best[0][0]
 
 
 def drive(frames_address: str, controls_address: Optional[str], policy, car: str = "car",

@@ -61,12 +61,18 @@ def throttle_from_waypoint(h4: float, t_max: float = THROTTLE_MAX, t_min: float 
 def controls_from_waypoints(waypoints: Sequence[float], speed: Optional[float] = None,
                             max_speed: Optional[float] = None, max_steering_deg: float = MAX_STEERING_DEG,
                             gain: float = 1.0, t_max: float = THROTTLE_MAX, t_min: float = THROTTLE_MIN,
-                            k: float = THROTTLE_PER_M) -> Tuple[float, float, float]:
+                            k: float = THROTTLE_PER_M, steer_waypoint: int = 1) -> Tuple[float, float, float]:
     """(steering, throttle, brake) for Client.SendControls from the 8
-    numbers v1 h1 v2 h2 v3 h3 v4 h4 (e.g. the network's output); brake 0."""
+    numbers v1 h1 v2 h2 v3 h3 v4 h4 (e.g. the network's output); brake 0.
+    steer_waypoint: which waypoint the steering aims at (1, the paper's
+    rule, ... 4); a farther one averages out a noisy first prediction at
+    the cost of cutting tight corners."""
     w = [float(x) for x in waypoints]
     if len(w) != 8:
         raise ValueError("controls_from_waypoints: expected 8 numbers v1 h1 ... v4 h4, got %d" % len(w))
-    steering = steering_from_waypoint(w[0], w[1], max_steering_deg, gain)
+    if steer_waypoint not in (1, 2, 3, 4):
+        raise ValueError("controls_from_waypoints: steer_waypoint must be 1 ... 4, got %r" % steer_waypoint)
+    i = 2 * (steer_waypoint - 1)
+    steering = steering_from_waypoint(w[i], w[i + 1], max_steering_deg, gain)
     throttle = throttle_from_waypoint(w[7], t_max, t_min, k, speed, max_speed)
     return steering, throttle, 0.0

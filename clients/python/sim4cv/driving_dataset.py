@@ -64,7 +64,8 @@ _NORMALS = {"N": (0.0, 1.0), "S": (0.0, -1.0), "E": (1.0, 0.0), "W": (-1.0, 0.0)
 def parse_map(path: str) -> dict:
     """name, surroundings, tile_size, grid (W, H), routes {name: (closed, [(col, row), ...])}
     and objects [(kind, x, y, yaw_deg)]."""
-    info = {"name": None, "surroundings": "", "tile_size": None, "grid": None, "routes": {}, "objects": []}
+    info = {"name": None, "surroundings": "", "tile_size": None, "grid": None, "routes": {}, "objects": [],
+            "path": path}
     current = None
     with open(path) as f:
         for raw in f:

@@ -75,9 +75,9 @@ class NetworkPolicy:
         if not os.path.isfile(path):
             raise EvalError("model file %s does not exist" % path)
         if path.endswith(".onnx"):
-            self.height, self.width, self.run = _load_onnx(path)
+            self.height, self.width, self.run, self.use_goal = _load_onnx(path)
         elif path.endswith(".pt"):
-            self.height, self.width, self.run = _load_torch(path)
+            self.height, self.width, self.run, self.use_goal = _load_torch(path)
         else:
             raise EvalError("model file %s: expected a .pt (sim4cv.driving_train) or .onnx file" % path)
 
@@ -106,7 +106,7 @@ def _load_onnx(path: str):
         raise EvalError("model file %s: expected input [1, 3, H, W] and output [1, 8] (v1 h1 ... v4 h4), found "
                         "input %s and output %s" % (path, dims, outs))
     run = load_onnx_with_opencv(path)
-    return dims[2], dims[3], run
+    return dims[2], dims[3], run, any(i.name == "goal" for i in model.graph.input)
 
 
 def _load_torch(path: str):
@@ -123,14 +123,14 @@ def _load_torch(path: str):
         x = torch.from_numpy(image).permute(2, 0, 1).float().unsqueeze(0)
         g = torch.tensor([[goal]], dtype=torch.float32) if model.use_goal else None
         return model(x, g)[0].numpy() if g is not None else model(x)[0].numpy()
-    return model.height, model.width, run
+    return model.height, model.width, run, model.use_goal
 
 
 # ---------------------------------------------------------------------------
 # One route
 
 def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: float, log=print,
-                obstacles: int = 0, seed: int = 0):
+                obstacles: int = 0, seed: int = 0, steer_waypoint: int = 1):
     """Drives one lap of `route` under `policy` (with `obstacles` parked cars
     to pass, placed as the dataset places them); returns (run dict, rows, deviations)."""
     lane = RoutePath(info, route)
@@ -147,6 +147,7 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
                       offset=(cam["forward_m"], 0.0, cam["above_body_m"]))
     client.subscribe(EGO_CAMERA, ["rgb"], "lockstep", with_state=True)
     progress = dm.Progress(path, 0.0)  # u along the route; its points are the ideal path's
+    goals = RouteNavigation(info, route) if getattr(policy, "use_goal", False) else None
     collisions = dm.Collisions(info["objects"] + parked)
     lap = path.length if path.closed else path.length - WAYPOINT_STEP_M * WAYPOINT_COUNT
     limit_s = lap / (speed / 2.0) + TIME_MARGIN_S
@@ -173,10 +174,13 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
             rows.append([round(t, 4), round(x, 3), round(y, 3), round(math.degrees(yaw), 2), round(progress.u, 3),
                          round(deviation, 4), round(car_speed, 3), "", "", "", hit])
             break
+        if goals is not None:  # the route's way at the junction ahead, as a navigation system tells it
+            policy.goal = goals.goal(progress.u)
         started = time.perf_counter()
         w = policy.waypoints(frame.image("rgb"), (x, y, yaw), progress)
         infer_s += time.perf_counter() - started
-        steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed)
+        steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed,
+                                                               steer_waypoint=steer_waypoint)
         client.send_controls(ego, steering, throttle, brake)
         rows.append([round(t, 4), round(x, 3), round(y, 3), round(math.degrees(yaw), 2), round(progress.u, 3),
                      round(deviation, 4), round(car_speed, 3), round(steering, 4), round(throttle, 4),
@@ -192,6 +196,22 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     return run, rows, deviations, path
 
 
+class RouteNavigation:
+    """The goal a navigation system gives a goal model on a known route:
+    within driving_guided.GOAL_BEFORE_M before a junction of the route, and
+    in it, the direction the route takes there (-1 left, 0 straight, +1
+    right); elsewhere 0 (the maps' routes turn at junctions where the road
+    also goes on, so the image alone cannot tell the way)."""
+
+    def __init__(self, info: dict, route: str):
+        from .driving_guided import RoadGrid, RouteGoals
+        self.goals = RouteGoals(info, RoadGrid.from_map(info["path"]), route)
+
+    def goal(self, u: float) -> float:
+        hit = self.goals.junction_at(u)
+        return float(hit[0]) if hit is not None else 0.0
+
+
 ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering", "throttle", "brake", "collision"]
 
 
@@ -200,7 +220,7 @@ ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering"
 
 def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, speed: float = DEFAULT_SPEED,
              conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "", obstacles: int = 0,
-             seed: int = 0) -> dict:
+             seed: int = 0, steer_waypoint: int = 1) -> dict:
     """Drives every route of every map; writes out/driving.json, out/runs/*.csv
     and the plots; returns driving.json's content."""
     import sim4cv
@@ -212,7 +232,8 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
     report = {"settings": {"policy": policy.name, "model": getattr(policy, "path", None), "label": label,
                            "maps": [p for p, _ in resolved], "speed_m_s": speed, "conditions": conditions or "clear_noon",
                            "frame_hz": frame_hz, "off_road_m": OFF_ROAD_M,
-                           "lane_departure_m": dm.LANE_DEPARTURE_M, "obstacles": obstacles, "seed": seed},
+                           "lane_departure_m": dm.LANE_DEPARTURE_M, "obstacles": obstacles, "seed": seed,
+                           "steer_waypoint": steer_waypoint},
               "maps": {}}
     pooled: Dict[str, List] = {"overall": [], "desert": [], "urban": []}
     trajectories = {}
@@ -234,7 +255,7 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
                     if entity.name in ("car", "uav"):  # the map's own car and the UAV filming it
                         client.remove(entity.id)
                 run, rows, deviations, ideal = drive_route(client, info, route, policy, speed, frame_hz, log,
-                                                           obstacles, seed)
+                                                           obstacles, seed, steer_waypoint)
             runs[route] = run
             map_devs.append(deviations)
             _write_rows(os.path.join(out, "runs", "%s_%s.csv" % (name, route)), rows)

@@ -109,8 +109,7 @@ class Scorer:
     def __call__(self, frame, pose):
         x, y, yaw = pose
         if self.progress is None:
-            from .driving_client import _nearest_u
-            self.progress = dm.Progress(self.path, _nearest_u(self.path, x, y))
+            self.progress = dm.Progress(self.path, dm.nearest_u(self.path, x, y))
             self.start_u = self.progress.u
             self.t0 = frame.sim_time
         d = self.progress.update(x, y)

@@ -121,6 +121,14 @@ def signed_distance_to_segment(px: float, py: float, segment) -> Tuple[float, fl
     return s, math.copysign(dist, side) if dist > 0 else 0.0
 
 
+def nearest_u(path, x: float, y: float) -> float:
+    """Arc length of the lane point nearest to (x, y) over the whole route
+    (Progress then follows it locally)."""
+    best = min(((signed_distance_to_segment(x, y, seg), seg[0]) for seg in path.segments),
+               key=lambda item: abs(item[0][1]))
+    return best[1] + best[0][0]
+
+
 class Progress:
     """Follows a car along a RoutePath: its arc length u (unwrapped: keeps
     growing past a closed route's length) and its signed deviation from the

@@ -164,10 +164,13 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
             start = load_model(init)
         except (OSError, KeyError, RuntimeError) as e:
             raise TrainError("--init %s: not a model.pt of this trainer (%s)" % (init, e))
-        if (start.height, start.width, start.use_goal) != (height, width, goal):
+        if (start.height, start.width) != (height, width) or (start.use_goal and not goal):
             raise TrainError("--init %s was trained at %dx%d goal=%s, not %dx%d goal=%s" % (
                 init, start.height, start.width, start.use_goal, height, width, goal))
-        model.load_state_dict(start.state_dict())
+        state = start.state_dict()
+        if goal and not start.use_goal:  # the goal's weights into fc1 start at 0: the old model's outputs
+            state["fc1.weight"] = torch.cat([state["fc1.weight"], torch.zeros(state["fc1.weight"].shape[0], 1)], 1)
+        model.load_state_dict(state)
         settings["init"] = os.path.abspath(init)
     opt = torch.optim.Adam(model.parameters(), lr=lr)
     gen = torch.Generator()

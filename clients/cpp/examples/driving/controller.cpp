@@ -34,6 +34,10 @@ Controller::Controller(ControllerParams params) : params_(params) {
     throw std::invalid_argument("Controller: need 0 <= t_min <= t_max <= 1, got " + Number(params_.t_min) + ", " +
                                 Number(params_.t_max));
   }
+  if (params_.steer_waypoint < 1 || params_.steer_waypoint > 4) {
+    throw std::invalid_argument("Controller: steer_waypoint must be 1 ... 4, got " +
+                                std::to_string(params_.steer_waypoint));
+  }
 }
 
 double Controller::Steering(double v1, double h1) const {
@@ -49,7 +53,8 @@ double Controller::Throttle(double h4, std::optional<double> speed, std::optiona
 
 DriveControls Controller::FromWaypoints(const Waypoints& w, std::optional<double> speed,
                                         std::optional<double> max_speed) const {
-  return {Steering(w[0], w[1]), Throttle(w[7], speed, max_speed), 0.0};
+  const int i = 2 * (params_.steer_waypoint - 1);
+  return {Steering(w[i], w[i + 1]), Throttle(w[7], speed, max_speed), 0.0};
 }
 
 }  // namespace sim4cv::driving

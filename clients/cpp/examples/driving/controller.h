@@ -4,7 +4,8 @@
 // v forward, h POSITIVE TO THE RIGHT).
 //
 //   steering = clip(gain * atan2(h1, v1) / radians(max_steering_deg), -1, 1)
-//              (v1 <= 0: -1, 0 or +1 by the sign of h1)
+//              (v1 <= 0: -1, 0 or +1 by the sign of h1; steer_waypoint k aims
+//              at waypoint k instead: vk, hk)
 //   throttle = clip(t_max - k * |h4|, t_min, t_max)   (0 when speed >= max_speed)
 //   brake    = 0
 //
@@ -26,6 +27,7 @@ struct ControllerParams {
   double t_max = 1.0;              // throttle on a straight (h4 = 0)
   double t_min = 0.3;              // throttle floor
   double k = 0.25;                 // throttle lost per metre of |h4|
+  int steer_waypoint = 1;          // the waypoint the steering aims at, 1 (the paper) ... 4
 };
 
 struct DriveControls {
@@ -37,7 +39,8 @@ struct DriveControls {
 class Controller {
  public:
   // Throws std::invalid_argument for max_steering_deg <= 0 or unless
-  // 0 <= t_min <= t_max <= 1 (driving_control.py raises ValueError for them).
+  // 0 <= t_min <= t_max <= 1 or steer_waypoint outside 1 ... 4
+  // (driving_control.py raises ValueError for them).
   explicit Controller(ControllerParams params = {});
 
   // Controls.steering in [-1, 1] (positive right) towards the waypoint (v1

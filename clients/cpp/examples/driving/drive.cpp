@@ -31,6 +31,7 @@ struct Options {
   std::string model, frames, controls, car, camera;
   double max_speed = 8;  // m/s, as sim4cv.driving drive and evaluate
   int goal = 0;
+  int steer_waypoint = 1;  // 1: the paper's rule; 2 is steadier with a noisy first waypoint
   bool left_lane = false;
   long frames_count = 0;  // 0: until Ctrl-C
   bool lockstep = false;
@@ -82,6 +83,8 @@ Options ParseArgs(int argc, char** argv) {
       o.camera = value;
     } else if (flag == "--max-speed") {
       o.max_speed = ParseNumber(flag, value, 0.1, 100);
+    } else if (flag == "--steer-waypoint") {
+      o.steer_waypoint = static_cast<int>(ParseNumber(flag, value, 1, 4));
     } else if (flag == "--goal") {
       if (value != "-1" && value != "0" && value != "1")
         throw UsageError("--goal wants -1, 0 or 1, got '" + value + "'");
@@ -169,7 +172,9 @@ int Run(const Options& o) {
     throw std::runtime_error("--goal " + std::to_string(o.goal) + " needs a model with a 'goal' input; " + o.model +
                              " has none");
   }
-  const driving::Controller controller;
+  driving::ControllerParams params;
+  params.steer_waypoint = o.steer_waypoint;
+  const driving::Controller controller(params);
   std::printf("model %s: %dx%d RGB%s\n", o.model.c_str(), model.width(), model.height(),
               model.has_goal() ? ", goal input" : "");
 
@@ -299,7 +304,7 @@ int main(int argc, char** argv) {
     if (*e.what() != '\0') std::cerr << "sim4cv_drive: " << e.what() << "\n";
     std::cerr << "usage: sim4cv_drive --model FILE.onnx --frames ADDRESS [--controls ADDRESS] --car NAME_OR_ID "
                  "--camera NAME [--add-camera] [--max-speed M/S (8)] [--goal -1|0|1] [--lane left|right] "
-                 "[--frames-count N] [--lockstep]\n"
+                 "[--steer-waypoint 1-4] [--frames-count N] [--lockstep]\n"
                  "  ADDRESS: tcp://HOST:PORT, udp://HOST:PORT or shm://NAME; --controls defaults to the daemon's UDP "
                  "port\n";
     return 2;
