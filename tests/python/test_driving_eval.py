@@ -128,3 +128,30 @@ def test_a_model_of_the_wrong_shape_is_refused_naming_both_shapes(tmp_path):
                         str(tmp_path / "ev")], cwd=os.path.join(REPO_ROOT, "clients", "python"),
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "output [1, 4]" in r.stderr
+
+
+SHIPPED = os.path.join(REPO_ROOT, "models", "driving")
+
+
+def test_the_shipped_model_loads_in_both_runtimes_and_agrees():
+    pytest.importorskip("torch")
+    import numpy as np
+    onnx_policy = de.NetworkPolicy(os.path.join(SHIPPED, "model.onnx"))
+    torch_policy = de.NetworkPolicy(os.path.join(SHIPPED, "model.pt"))
+    assert (onnx_policy.height, onnx_policy.width, onnx_policy.use_goal) == (90, 160, True)
+    assert (torch_policy.height, torch_policy.width, torch_policy.use_goal) == (90, 160, True)
+    image = np.random.default_rng(1).integers(0, 256, (180, 320, 3), dtype=np.uint8)
+    for goal in (-1.0, 0.0, 1.0):
+        onnx_policy.goal = torch_policy.goal = goal
+        a, b = onnx_policy.waypoints(image, None, None), torch_policy.waypoints(image, None, None)
+        assert a == pytest.approx(b, abs=1e-3)
+
+
+def test_the_shipped_model_drives_a_lap_of_a_test_map(tmp_path):
+    # test/01_urban: a lap of 355 m with a left turn at a crossroads (the goal input says left)
+    policy = de.NetworkPolicy(os.path.join(SHIPPED, "model.onnx"))
+    policy.path = "model.onnx"
+    report = de.evaluate(policy, [os.path.join(REPO_ROOT, "scenes", "driving", "test", "01_urban.map")], ["urban"],
+                         str(tmp_path), steer_waypoint=2, log=lambda *a: None)
+    o = report["overall"]
+    assert o["completed"] == 1 and o["mean_deviation_cm"] < 30.0 and o["within_1m"] > 0.97
