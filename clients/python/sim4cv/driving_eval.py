@@ -117,12 +117,12 @@ def _load_torch(path: str):
     except Exception as e:  # noqa: BLE001
         raise EvalError("model file %s is not a sim4cv.driving_train model.pt: %s" % (path, e)) from None
     model.eval()
-    torch.set_grad_enabled(False)
 
     def run(image, goal):
         x = torch.from_numpy(image).permute(2, 0, 1).float().unsqueeze(0)
         g = torch.tensor([[goal]], dtype=torch.float32) if model.use_goal else None
-        return model(x, g)[0].numpy() if g is not None else model(x)[0].numpy()
+        with torch.no_grad():  # only here: turning gradients off globally would break training in this process
+            return model(x, g)[0].numpy() if g is not None else model(x)[0].numpy()
     return model.height, model.width, run, model.use_goal
 
 
