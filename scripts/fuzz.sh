@@ -13,7 +13,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${SIM4CV_FUZZ_BUILD_DIR:-build-fuzz}
-ALL_TARGETS="fuzz_envelope fuzz_udp_datagram fuzz_udp_reassembler fuzz_map fuzz_runlog fuzz_configure fuzz_shm"
+ALL_TARGETS="fuzz_envelope fuzz_udp_datagram fuzz_udp_reassembler fuzz_map fuzz_runlog fuzz_configure fuzz_shm fuzz_websocket_json"
 TARGETS=${FUZZ_TARGETS:-$ALL_TARGETS}
 
 build() {

@@ -114,9 +114,9 @@ inline constexpr uint32_t kMaxOutstandingConfigures = 4;
 
 // Default of --max-message-bytes: the largest Envelope a client may send. The
 // largest legal request is a LoadMap carrying a map's text (at most
-// kMaxMapTextBytes); another MiB holds its Envelope with room to spare, and bounds what one message costs the TCP thread to read, hold and
-// parse (issue 14, finding 11: 64 MiB messages stalled every TCP client).
-// Frames the daemon sends are not bounded by it.
+// kMaxMapTextBytes); another MiB holds its Envelope with room to spare, and bounds what one message costs the TCP
+// thread to read, hold and parse (issue 14, finding 11: 64 MiB messages stalled every TCP client). Frames the daemon
+// sends are not bounded by it.
 inline constexpr uint32_t kDefaultMaxMessageBytes = static_cast<uint32_t>(kMaxMapTextBytes) + (1u << 20);
 // TCP reads a message's body in pieces of at most this many bytes and grows
 // its buffer only by what arrived: a length prefix alone allocates nothing
@@ -193,6 +193,28 @@ inline constexpr std::size_t kLockstepFramesQueued = 2;
 // steady use are never freed, so steady state allocates nothing.
 inline constexpr std::size_t kFramePoolSpare = 2;
 inline constexpr int64_t kFramePoolTrimPeriodMs = 1000;
+
+// ListMaps: map names one answer lists (Configured.maps), so a --maps-dir
+// holding a huge tree cannot make one answer huge; the shipped maps are 44.
+inline constexpr std::size_t kMaxListedMaps = 1000;
+
+// Subscribe.max_fps: the highest frame rate cap a subscriber may ask for
+// (above it, ask for 0: every frame).
+inline constexpr double kMaxSubscribeFps = 1000.0;
+
+// --- the studio's HTTP port (--http-port; docs/studio.md) ---
+// An HTTP request's start line and headers (a browser's are under 2 KiB);
+// over it the connection is answered 431 and closed.
+inline constexpr uint32_t kMaxHttpHeaderBytes = 16u << 10;
+// Connections over --http-max-clients are answered (HTTP 503, or a
+// WebSocket's TOO_MANY_CLIENTS Error) and closed; while this many such
+// answers are under way, further ones are closed at once unanswered, so a
+// flood of connections holds a bounded number of descriptors.
+inline constexpr uint32_t kMaxHttpRejecting = 16;
+// A WebSocket client's keep-alive: the daemon pings a connection silent for
+// half of this and closes it when nothing, not even the pong, came back in
+// it. A page that stops reading stops answering behind its unread frames.
+inline constexpr uint32_t kWebSocketIdleTimeoutMs = 30000;
 
 // --- shared memory ---
 // The request ring, response ring and message sizes of a client's area are

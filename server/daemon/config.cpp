@@ -1,6 +1,7 @@
 #include "server/daemon/config.h"
 
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <sstream>
@@ -139,6 +140,17 @@ Usage: sim4cvd [flags]
   --idle-timeout-ms N       a handshaken TCP client that neither sends nor receives anything for this
                             long is disconnected (default 0 = never: a lockstep client paused in a
                             debugger stays connected)
+  --controls-timeout-ms N   a car driven by Controls that gets none for N ms of simulation time brakes
+                            to a stop and is free for another client to drive (default 1000; 0 = never)
+  --http-port N             serve the studio (docs/studio.md: live view, map, controls) and its
+                            WebSocket transport on this HTTP port; 0 picks any free port (default
+                            -1: off). Anyone who can reach it can drive the simulation
+  --http-bind ADDRESS       address the HTTP port listens on (default 127.0.0.1; use SSH port
+                            forwarding rather than 0.0.0.0: there is no authentication)
+  --http-max-clients N      most HTTP connections at once, each WebSocket one (default 32); more
+                            are answered 503 / TOO_MANY_CLIENTS and closed
+  --studio-dir DIR          the studio's files (default: the source tree's studio/, else the
+                            installed share/sim4cv/studio)
   --udp-port N              UDP port; 0 picks any free port, -1 turns UDP off (default 0)
   --udp-datagram-bytes N    largest datagram the daemon sends; frames are chunked to fit
                             (default 65000 for loopback; 1472 for a 1500-byte MTU network)
@@ -149,7 +161,8 @@ Usage: sim4cvd [flags]
   --shm-expiry-ms N         a shared-memory client silent this long is disconnected (default 5000)
   --shm-channels LIST       the pixel channels the shared-memory ring carries, separated by commas
                             (default rgb,depth,mask); fewer channels, less copying. The channels:
-)" + ChannelHelp() + R"(  --conditions PRESET       weather and time of day of the RGB images: )" + conditions::Names() + R"(
+)" + ChannelHelp() +
+         R"(  --conditions PRESET       weather and time of day of the RGB images: )" + conditions::Names() + R"(
                             (default clear_noon; docs/protocol.md, "Conditions"). Only RGB changes
   --hour H                  local solar time in [0, 24] (default: the preset's own hour)
   --quality Q               full (sky, sun shadows, procedural materials) or fast (flat shading, the
@@ -162,7 +175,8 @@ Usage: sim4cvd [flags]
   --randomize-every N       with --randomize, new conditions every N frames (default 0: once per
                             episode, i.e. at start, Reset and LoadMap)
 Camera effects (docs/protocol.md, "Camera effects"; all off by default, a lens distorts every channel):
-)" + EffectsHelp() + R"(  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
+)" + EffectsHelp() +
+         R"(  --log-level LEVEL         debug, info, warning or error (default info); log lines go to stderr
   --log FILE                record every frame (poses, tracker and ground-truth boxes, car controls)
                             to the run log FILE (docs/logs.md; extension .s4log by convention)
   --log-label TEXT          what the run is, e.g. the tracker's name, for the log's header (default:
@@ -173,13 +187,21 @@ Camera effects (docs/protocol.md, "Camera effects"; all off by default, a lens d
                             log; the others fly and drive by physics around them (default: all)
   --help                    this text
 
-When ready it prints one line on stdout, e.g. `sim4cvd listening tcp=PORT udp=PORT shm=/NAME`
+When ready it prints one line on stdout, e.g. `sim4cvd listening tcp=PORT udp=PORT shm=/NAME http=PORT`
 (a field per transport that is on).
 SIGINT or SIGTERM end it cleanly.
 )";
 }
 
 std::string DefaultMapsDir() { return SIM4CV_DEFAULT_MAPS_DIR; }
+
+std::string DefaultStudioDir() {
+  std::error_code error;
+  if (std::filesystem::is_directory(SIM4CV_DEFAULT_STUDIO_DIR, error)) return SIM4CV_DEFAULT_STUDIO_DIR;
+  // An installed daemon (cmake --install): PREFIX/bin/sim4cvd, PREFIX/share/sim4cv/studio.
+  const std::filesystem::path binary = std::filesystem::read_symlink("/proc/self/exe", error);
+  return error ? SIM4CV_DEFAULT_STUDIO_DIR : (binary.parent_path().parent_path() / "share/sim4cv/studio").string();
+}
 
 std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::string& help_text) {
   Config config;
@@ -231,6 +253,13 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
        [&](auto& f, auto& v) { config.message_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
       {"--idle-timeout-ms",
        [&](auto& f, auto& v) { config.idle_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
+      {"--controls-timeout-ms",
+       [&](auto& f, auto& v) { config.controls_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
+      {"--http-port", [&](auto& f, auto& v) { config.http_port = ParseNumber<int32_t>(f, v, 0, 65535); }},
+      {"--http-bind", [&](auto&, auto& v) { config.http_bind = v; }},
+      {"--http-max-clients",
+       [&](auto& f, auto& v) { config.http_max_clients = ParseNumber<uint32_t>(f, v, 1, 100000); }},
+      {"--studio-dir", [&](auto&, auto& v) { config.studio_dir = v; }},
       {"--udp-port", [&](auto& f, auto& v) { config.udp_port = ParseNumber<int32_t>(f, v, -1, 65535); }},
       {"--udp-datagram-bytes",
        [&](auto& f, auto& v) { config.udp_datagram_bytes = ParseNumber<uint32_t>(f, v, 576, 65000); }},
@@ -261,13 +290,17 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
          SIM4CV_THROW_UNLESS(preset, f << " '" << v << "' is not a preset; use one of " << conditions::Names());
          config.conditions.preset = *preset;
        }},
-      {"--hour", [&](auto& f, auto& v) { hour = ParseNumber<double>(f, v, conditions::kMinHour, conditions::kMaxHour); }},
+      {"--hour",
+       [&](auto& f, auto& v) { hour = ParseNumber<double>(f, v, conditions::kMinHour, conditions::kMaxHour); }},
       {"--noise-read",
-       [&](auto& f, auto& v) { config.conditions.noise_read = ParseNumber<double>(f, v, 0, conditions::kMaxNoiseRead); }},
+       [&](auto& f, auto& v) {
+         config.conditions.noise_read = ParseNumber<double>(f, v, 0, conditions::kMaxNoiseRead);
+       }},
       {"--noise-shot",
-       [&](auto& f, auto& v) { config.conditions.noise_shot = ParseNumber<double>(f, v, 0, conditions::kMaxNoiseShot); }},
-      {"--randomize",
-       [&](auto& f, auto& v) { config.randomize_seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
+       [&](auto& f, auto& v) {
+         config.conditions.noise_shot = ParseNumber<double>(f, v, 0, conditions::kMaxNoiseShot);
+       }},
+      {"--randomize", [&](auto& f, auto& v) { config.randomize_seed = ParseNumber<uint64_t>(f, v, 0, UINT64_MAX); }},
       {"--randomize-every",
        [&](auto& f, auto& v) { config.randomize_every_frames = ParseNumber<uint32_t>(f, v, 0, 1000000000); }},
       {"--quality",

@@ -7,25 +7,28 @@
 #include <vector>
 
 #include "protocol/channels.h"
-#include "protocol/shm_layout.h"
-#include "server/transport/shm/shm_region.h"
-#include "server/common/limits.h"
-#include "server/sim/traffic/traffic_config.h"
 #include "protocol/conditions.h"
 #include "protocol/effects.h"
+#include "protocol/shm_layout.h"
+#include "server/common/limits.h"
+#include "server/sim/traffic/traffic_config.h"
+#include "server/transport/shm/shm_region.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::daemon {
 
-
 // The source tree's scenes/ folder, where the shipped maps are.
 std::string DefaultMapsDir();
 
+// The studio's files: the source tree's studio/ if it is there, else
+// share/sim4cv/studio beside the installed binary's bin/.
+std::string DefaultStudioDir();
+
 struct Config {
-  std::string scene_file;  // empty: the embedded default scene
-  std::string map_file;    // a tile map (docs/maps.md) instead of a scene file
-  std::string route;       // the map route the target car drives; empty: the first closed one
-  float car_speed = 6.0f;  // m/s, the target car's set speed on a map
+  std::string scene_file;                   // empty: the embedded default scene
+  std::string map_file;                     // a tile map (docs/maps.md) instead of a scene file
+  std::string route;                        // the map route the target car drives; empty: the first closed one
+  float car_speed = 6.0f;                   // m/s, the target car's set speed on a map
   std::string maps_dir = DefaultMapsDir();  // where LoadMap finds shipped maps by name
   // Traffic on map scenes (docs/maps.md, "Traffic"); applies to every map
   // loaded, at start or by a client's LoadMap. Its seed is --traffic-seed,
@@ -56,7 +59,17 @@ struct Config {
   uint32_t handshake_timeout_ms = limits::kDefaultHandshakeTimeoutMs;
   uint32_t message_timeout_ms = limits::kDefaultMessageTimeoutMs;
   uint32_t idle_timeout_ms = limits::kDefaultIdleTimeoutMs;
+  // A car driven by Controls that gets none for this long (simulation time)
+  // brakes to a stop and is free for another client; 0 turns it off.
+  uint32_t controls_timeout_ms = 1000;
   int32_t udp_port = 0;  // -1: no UDP transport
+  // The studio (docs/studio.md): its pages and a WebSocket transport on one
+  // HTTP port; -1: off. Bound to loopback unless --http-bind says otherwise:
+  // anyone who reaches the port can drive the simulation.
+  int32_t http_port = -1;
+  std::string http_bind = "127.0.0.1";
+  uint32_t http_max_clients = 32;               // HTTP connections at once, WebSockets included
+  std::string studio_dir = DefaultStudioDir();  // the page's files (studio/)
   uint32_t udp_datagram_bytes = 65000;
   uint32_t udp_expiry_ms = 5000;
   std::string shm_name;  // empty: no shared-memory transport
@@ -69,9 +82,9 @@ struct Config {
   std::string log_level = "info";
   // Run logs (docs/logs.md): record every frame to log_file; replay_file makes
   // the car and the UAV follow a recorded log's poses instead of physics.
-  std::string log_file;     // empty: no run log
-  std::string log_label;    // the log header's label; empty: the scene name
-  std::string replay_file;  // empty: simulate
+  std::string log_file;               // empty: no run log
+  std::string log_label;              // the log header's label; empty: the scene name
+  std::string replay_file;            // empty: simulate
   std::vector<uint32_t> replay_only;  // entity ids that follow the log; empty: all (physics is not stepped)
 
   // Physics steps per frame; physics_hz must be a whole multiple of frame_hz.

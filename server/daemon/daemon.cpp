@@ -11,6 +11,7 @@
 #include "server/common/diagnostics.h"
 #include "server/daemon/sim_thread.h"
 #include "server/daemon/state_message.h"
+#include "server/transport/http/http_transport.h"
 #include "server/transport/shm/shm_transport.h"
 #include "server/transport/tcp/tcp_transport.h"
 #include "server/transport/udp/udp_transport.h"
@@ -59,9 +60,13 @@ int RunDaemon(const Config& config) {
   const sim::Scene& scene = *initial_scene;
 
   std::vector<std::unique_ptr<transport::Transport>> transports;
-  transports.push_back(transport::MakeTcpTransport(
-      {config.bind_address, config.tcp_port, config.max_clients, config.max_message_bytes, config.tcp_send_buffer_bytes,
-       {config.handshake_timeout_ms, config.message_timeout_ms, config.idle_timeout_ms}}));
+  transports.push_back(
+      transport::MakeTcpTransport({config.bind_address,
+                                   config.tcp_port,
+                                   config.max_clients,
+                                   config.max_message_bytes,
+                                   config.tcp_send_buffer_bytes,
+                                   {config.handshake_timeout_ms, config.message_timeout_ms, config.idle_timeout_ms}}));
   if (config.udp_port >= 0) {
     transports.push_back(
         transport::MakeUdpTransport({config.bind_address, static_cast<uint16_t>(config.udp_port),
@@ -78,6 +83,17 @@ int RunDaemon(const Config& config) {
     shm.expiry_ms = config.shm_expiry_ms;
     shm.channel_mask = config.shm_channel_mask;
     transports.push_back(transport::MakeShmTransport(shm));
+  }
+  if (config.http_port >= 0) {
+    transport::HttpOptions http;
+    http.bind_address = config.http_bind;
+    http.port = static_cast<uint16_t>(config.http_port);
+    http.max_clients = config.http_max_clients;
+    http.other_connections = config.max_clients;  // TCP's, for the descriptor check
+    http.studio_dir = config.studio_dir;
+    http.timeouts = {config.handshake_timeout_ms, config.message_timeout_ms, config.idle_timeout_ms};
+    http.send_buffer_bytes = config.tcp_send_buffer_bytes;
+    transports.push_back(transport::MakeHttpTransport(http));
   }
 
   session::CommandQueue commands;

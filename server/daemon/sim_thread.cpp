@@ -41,7 +41,9 @@ SimThread::SimThread(const Config& config, std::shared_ptr<const sim::Scene> sce
       commands_(commands),
       latest_state_(latest_state),
       directory_(directory),
-      sim_(config_, std::move(scene)) {
+      counters_(counters),
+      sim_(config_, std::move(scene)),
+      drivers_(config_.controls_timeout_ms) {
   const sim::Scene& scene_ref = sim_.scene();
   if (!config.log_file.empty()) {
     logger_ = std::make_unique<RunLogger>(config, scene_ref, sim_.state(), counters);
@@ -176,11 +178,12 @@ void SimThread::ApplyCommands() {
     std::visit(Overloaded{
                    [&](session::SubscribeCommand& c) { Subscribe(client, c); },
                    [&](session::StepCommand&) { scheduler_.AddStep(client); },
-                   [&](session::ControlsCommand& c) { ApplyControls(c); },
+                   [&](session::ControlsCommand& c) { ApplyControls(client, c); },
                    [&](session::TrackerOutputCommand& c) { ApplyTrackerOutput(client, c); },
                    [&](session::ConfigureCommand& c) { Configure(c); },
                    [&](session::DisconnectCommand&) {
                      scheduler_.Remove(client);
+                     drivers_.Release(client);
                      ForgetTrackerReport(sim_.state(), client);
                    },
                },
@@ -193,7 +196,7 @@ void SimThread::Subscribe(session::ClientId client, session::SubscribeCommand& s
   const auto& cameras = sim_.cameras();
   if (subscribe.camera_index < cameras.size() && !cameras[subscribe.camera_index].name.empty()) {
     scheduler_.Subscribe(client, subscribe.camera_index, subscribe.delivery, subscribe.channels,
-                         std::move(subscribe.link), subscribe.gate);
+                         std::move(subscribe.link), subscribe.gate, subscribe.min_interval_ns);
     return;
   }
   // The camera went (RemoveCamera, Remove, Reset, LoadMap) between the
@@ -203,15 +206,18 @@ void SimThread::Subscribe(session::ClientId client, session::SubscribeCommand& s
              "subscribe to a camera the world has (GetWorld lists them)");
 }
 
-void SimThread::ApplyControls(session::ControlsCommand& controls) {
-  sim::Entity* car = sim_.state().Find(controls.entity_id);
-  if (car && car->kind == sim::EntityKind::kCar) {
-    car->car_command = {controls.steering, controls.throttle, controls.brake, true};
+void SimThread::ApplyControls(session::ClientId client, session::ControlsCommand& controls) {
+  sim::State& state = sim_.state();
+  sim::Entity* car = state.Find(controls.entity_id);
+  if (!car || car->kind != sim::EntityKind::kCar) {
+    OfferError(controls.link.get(), proto::ERROR_CODE_UNKNOWN_ENTITY,
+               "Controls.entity_id " + std::to_string(controls.entity_id) + " is not a car; the world holds " +
+                   sim::EntityList(state));
     return;
   }
-  OfferError(controls.link.get(), proto::ERROR_CODE_UNKNOWN_ENTITY,
-             "Controls.entity_id " + std::to_string(controls.entity_id) + " is not a car; the world holds " +
-                 sim::EntityList(sim_.state()));
+  // One driver per car: another client's Controls are refused, not mixed in.
+  const std::string refused = drivers_.Drive(state, *car, client, controls);
+  if (!refused.empty()) OfferError(controls.link.get(), proto::ERROR_CODE_INVALID_STATE, refused);
 }
 
 void SimThread::ApplyTrackerOutput(session::ClientId client, session::TrackerOutputCommand& output) {
@@ -247,6 +253,7 @@ void SimThread::Configure(session::ConfigureCommand& command) {
       throw;
     }
     sim_.Commit();
+    drivers_.AfterConfigure(sim_.state(), change.new_scene);  // only now: an Undo keeps the drivers
     if (change.new_conditions) {
       frames_.SetLook(render::LookOf(sim_.conditions()));
       LOG_INFO("conditions now " << conditions::Describe(sim_.conditions()));
@@ -306,12 +313,15 @@ void SimThread::PublishWorld() {
 void SimThread::AdvanceFrame() {
   const double dt = 1.0 / config_.physics_hz;
   sim::State& state = sim_.state();
+  // Once per frame, before its physics: a car whose driver went quiet stops.
+  if (const uint32_t stopped = drivers_.BrakeStale(state); stopped > 0) counters_.Add("controls.timeouts", stopped);
   for (uint32_t i = 0; i < config_.substeps_per_frame(); ++i) sim_.world().Step(state, dt);
   ++state.frame_id;
   if (sim_.AdvanceConditions()) frames_.SetLook(render::LookOf(sim_.conditions()));
   PublishState();
   frames_.Update(state);
   const auto& cameras = sim_.cameras();
+  scheduler_.BeginFrame(std::chrono::steady_clock::now());  // for Subscribe.max_fps
   for (uint32_t camera = 0; camera < cameras.size(); ++camera) {
     const channels::ChannelSet wanted = scheduler_.ChannelsWanted(camera);
     if (wanted != 0) RenderCamera(camera, wanted);

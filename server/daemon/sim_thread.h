@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "server/daemon/car_drivers.h"
 #include "server/daemon/config.h"
 #include "server/daemon/frame_assembler.h"
 #include "server/daemon/run_logger.h"
@@ -53,7 +54,7 @@ class SimThread {
   void Fail(const char* what);
   void ApplyCommands();
   void Subscribe(session::ClientId client, session::SubscribeCommand& subscribe);
-  void ApplyControls(session::ControlsCommand& controls);
+  void ApplyControls(session::ClientId client, session::ControlsCommand& controls);
   // Records a tracker's box (the servo of a kTrack UAV steers by it), or
   // answers the client an Error saying why not.
   void ApplyTrackerOutput(session::ClientId client, session::TrackerOutputCommand& output);
@@ -78,10 +79,12 @@ class SimThread {
   session::CommandQueue& commands_;
   session::LatestState& latest_state_;
   session::WorldDirectory& directory_;
+  session::Counters& counters_;
   // Pools first: frames handed out must be returned before the pools go.
   session::FramePool frame_pool_{4};
   session::StatePool state_pool_{4};
   Simulation sim_;
+  CarDrivers drivers_;                 // who drives which car with Controls; --controls-timeout-ms
   std::unique_ptr<RunLogger> logger_;  // null without --log; the scheduler's observer
   session::Scheduler scheduler_;
   std::vector<session::Command> drained_;

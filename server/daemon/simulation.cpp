@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "server/common/limits.h"
+#include "server/daemon/map_names.h"
 #include "server/daemon/run_logger.h"
 #include "server/session/effects_wire.h"
 #include "server/sim/map/map_text.h"
@@ -158,6 +159,11 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       change.world_changed = false;
       break;
     case Kind::kGetWorld:
+      if (request.get_world().with_map_text() && scene_->map) answer.set_map_text(map::WriteMap(*scene_->map));
+      change.world_changed = false;
+      break;
+    case Kind::kListMaps:
+      ListMapNames(config_.maps_dir, *answer.mutable_maps());
       change.world_changed = false;
       break;
     case Kind::kSetConditions:

@@ -23,7 +23,7 @@ namespace {
 
 }  // namespace
 
-void JpegRoundTrip::Apply(uint8_t* rgb, uint32_t width, uint32_t height, int quality) {
+std::span<const uint8_t> JpegEncoder::Encode(const uint8_t* rgb, uint32_t width, uint32_t height, int quality) {
   const std::size_t row_bytes = static_cast<std::size_t>(width) * 3;
   // Larger than any JPEG of the image (raw size plus headers), so libjpeg never reallocates it.
   if (encoded_.size() < row_bytes * height + 4096) encoded_.resize(row_bytes * height + 4096);
@@ -45,7 +45,8 @@ void JpegRoundTrip::Apply(uint8_t* rgb, uint32_t width, uint32_t height, int qua
     jpeg_set_quality(&encoder, quality, TRUE);
     jpeg_start_compress(&encoder, TRUE);
     while (encoder.next_scanline < height) {
-      JSAMPROW row = rgb + encoder.next_scanline * row_bytes;
+      // libjpeg's row type is not const; it only reads the rows it is given.
+      JSAMPROW row = const_cast<uint8_t*>(rgb) + encoder.next_scanline * row_bytes;
       jpeg_write_scanlines(&encoder, &row, 1);
     }
     jpeg_finish_compress(&encoder);
@@ -56,13 +57,20 @@ void JpegRoundTrip::Apply(uint8_t* rgb, uint32_t width, uint32_t height, int qua
   jpeg_destroy_compress(&encoder);
   if (buffer != encoded_.data()) std::free(buffer);  // cannot happen: the buffer holds the raw image
   if (buffer != encoded_.data()) throw std::runtime_error("JPEG effect: encoded image outgrew its buffer");
+  return {encoded_.data(), static_cast<std::size_t>(size)};
+}
 
+void JpegRoundTrip::Apply(uint8_t* rgb, uint32_t width, uint32_t height, int quality) {
+  const std::size_t row_bytes = static_cast<std::size_t>(width) * 3;
+  const std::span<const uint8_t> encoded = encoder_.Encode(rgb, width, height, quality);
+
+  jpeg_error_mgr errors{};
   jpeg_decompress_struct decoder{};
   decoder.err = jpeg_std_error(&errors);
   errors.error_exit = ThrowError;
   jpeg_create_decompress(&decoder);
   try {
-    jpeg_mem_src(&decoder, encoded_.data(), size);
+    jpeg_mem_src(&decoder, encoded.data(), static_cast<unsigned long>(encoded.size()));
     jpeg_read_header(&decoder, TRUE);
     decoder.out_color_space = JCS_RGB;
     decoder.dct_method = JDCT_ISLOW;  // exact integer DCT: the same on every machine

@@ -6,9 +6,24 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace sim4cv::render {
+
+// RGB8 to a baseline JPEG file in memory: the camera effect below, and the
+// studio's WebSocket viewers (server/transport/http), which encode on their
+// own thread, never the sim thread.
+class JpegEncoder {
+ public:
+  // `rgb`: width*height RGB8 pixels, top row first; quality 1..100. The
+  // bytes stay valid until the next call. Throws std::runtime_error with
+  // libjpeg's message.
+  std::span<const uint8_t> Encode(const uint8_t* rgb, uint32_t width, uint32_t height, int quality);
+
+ private:
+  std::vector<uint8_t> encoded_;  // reused: sized for the largest image seen
+};
 
 class JpegRoundTrip {
  public:
@@ -18,7 +33,7 @@ class JpegRoundTrip {
   void Apply(uint8_t* rgb, uint32_t width, uint32_t height, int quality);
 
  private:
-  std::vector<uint8_t> encoded_;  // reused: sized for the largest image seen
+  JpegEncoder encoder_;
 };
 
 }  // namespace sim4cv::render

@@ -5,8 +5,8 @@
 #include <sstream>
 
 #include "protocol/framing.h"
-#include "server/common/limits.h"
 #include "server/common/diagnostics.h"
+#include "server/common/limits.h"
 #include "server/common/quoted.h"
 #include "server/session/configure_check.h"
 
@@ -175,6 +175,19 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
                   "so subscribe with DELIVERY_NEWEST",
                   false, reply);
   }
+  const double max_fps = subscribe.max_fps();
+  if (!(max_fps >= 0 && max_fps <= limits::kMaxSubscribeFps)) {  // also NaN
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                  "Subscribe.max_fps is " + std::to_string(max_fps) + "; give 0 (every frame) to " +
+                      std::to_string(static_cast<int>(limits::kMaxSubscribeFps)) + " frames per second",
+                  false, reply);
+  }
+  if (max_fps > 0 && delivery == proto::DELIVERY_LOCKSTEP) {
+    return Refuse(proto::ERROR_CODE_INVALID_ARGUMENT,
+                  "Subscribe.max_fps caps DELIVERY_NEWEST and DELIVERY_ON_REQUEST; a lockstep subscriber gets every "
+                  "frame it Steps for, so leave max_fps 0",
+                  false, reply);
+  }
   subscribed_ = true;
   with_state_ = subscribe.with_state();
   camera_index_ = static_cast<uint32_t>(camera);
@@ -183,13 +196,15 @@ Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto
   subscription_.set_camera(subscribe.camera());
   *subscription_.mutable_channels() = subscribe.channels();
   subscription_.set_delivery(delivery);
+  subscription_.set_max_fps(max_fps);
   std::shared_ptr<const MailboxGate> gate;
   if (mailbox_) {
     mailbox_->Reset(delivery, &context_.commands);
     gate = mailbox_->gate();
   }
-  context_.commands.Post(
-      {client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, seen, link_.lock(), std::move(gate)}});
+  const int64_t min_interval_ns = max_fps > 0 ? static_cast<int64_t>(1e9 / max_fps) : 0;
+  context_.commands.Post({client_, SubscribeCommand{static_cast<uint32_t>(camera), delivery, seen, link_.lock(),
+                                                    std::move(gate), min_interval_ns}});
   *reply.mutable_subscribed() = subscription_;
   return Outcome::kReply;
 }
@@ -230,7 +245,7 @@ Outcome ClientProtocol::HandleControls(const proto::Controls& controls, proto::E
   }
   // Whether entity_id is a car the sim thread checks, and answers an Error through the link if not.
   if (!context_.commands.TryPost({client_, ControlsCommand{controls.entity_id(), controls.steering(),
-                                                          controls.throttle(), controls.brake(), link_.lock()}})) {
+                                                           controls.throttle(), controls.brake(), link_.lock()}})) {
     return RefuseBusy("Controls", reply);
   }
   return Outcome::kNoReply;
@@ -302,9 +317,7 @@ Outcome ClientProtocol::HandleConfigure(const proto::Configure& request, proto::
   return Outcome::kNoReply;
 }
 
-void ClientProtocol::OnFramesSent(uint64_t count) {
-  outstanding_steps_ -= std::min(count, outstanding_steps_);
-}
+void ClientProtocol::OnFramesSent(uint64_t count) { outstanding_steps_ -= std::min(count, outstanding_steps_); }
 
 void ClientProtocol::Disconnect() {
   if (disconnected_) return;

@@ -7,10 +7,9 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
-
-#include "protocol/channels.h"
 #include <variant>
 
+#include "protocol/channels.h"
 #include "server/session/client_link.h"
 #include "sim4cv.pb.h"
 
@@ -29,9 +28,10 @@ inline ClientId NewClientId() {
 struct SubscribeCommand {
   uint32_t camera_index = 0;
   proto::Delivery delivery = proto::DELIVERY_NEWEST;
-  channels::ChannelSet channels = 0;  // what the frames must carry
-  std::shared_ptr<ClientLink> link;  // where frames go
+  channels::ChannelSet channels = 0;                  // what the frames must carry
+  std::shared_ptr<ClientLink> link;                   // where frames go
   std::shared_ptr<const MailboxGate> gate = nullptr;  // lockstep: whether the client's mailbox is full
+  int64_t min_interval_ns = 0;                        // Subscribe.max_fps as a period; 0: every frame
 };
 
 struct StepCommand {};
@@ -98,7 +98,8 @@ struct DisconnectCommand {};
 
 struct Command {
   ClientId client = 0;
-  std::variant<SubscribeCommand, StepCommand, ControlsCommand, TrackerOutputCommand, ConfigureCommand, DisconnectCommand>
+  std::variant<SubscribeCommand, StepCommand, ControlsCommand, TrackerOutputCommand, ConfigureCommand,
+               DisconnectCommand>
       body;
 };
 

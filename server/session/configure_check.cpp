@@ -249,6 +249,7 @@ std::string CheckConfigure(const proto::Configure& request) {
     case Kind::kRemove:
     case Kind::kReset:
     case Kind::kGetWorld:
+    case Kind::kListMaps:
       return {};
     case Kind::REQUEST_NOT_SET:
       break;

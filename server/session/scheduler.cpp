@@ -12,8 +12,9 @@ Scheduler::Subscription* Scheduler::Find(ClientId client) {
 
 void Scheduler::Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery,
                           channels::ChannelSet channels, std::shared_ptr<ClientLink> link,
-                          std::shared_ptr<const MailboxGate> gate) {
+                          std::shared_ptr<const MailboxGate> gate, int64_t min_interval_ns) {
   Subscription subscription{client, camera_index, delivery, channels, 0, std::move(link), std::move(gate)};
+  subscription.min_interval_ns = min_interval_ns;
   Subscription* existing = Find(client);
   if (existing) {
     // A replaced subscription keeps no credits: they were for the old one.
@@ -55,7 +56,7 @@ channels::ChannelSet Scheduler::ChannelsWanted(uint32_t camera_index) const {
   channels::ChannelSet wanted = 0;
   for (const auto& s : subscriptions_) {
     // A subscription always wants something: a frame without pixels still carries its metadata.
-    if (s.camera_index == camera_index) wanted |= s.channels | channels::Bit(proto::CHANNEL_UNSPECIFIED);
+    if (s.camera_index == camera_index && Due(s)) wanted |= s.channels | channels::Bit(proto::CHANNEL_UNSPECIFIED);
   }
   return wanted;
 }
@@ -91,10 +92,17 @@ void Scheduler::ReleaseFrames() {
   held_.clear();
 }
 
-void Scheduler::OfferToSubscribers(const FrameRef& frame) const {
-  for (const auto& s : subscriptions_) {
+void Scheduler::OfferToSubscribers(const FrameRef& frame) {
+  for (auto& s : subscriptions_) {
     // A null link (a subscriber fed some other way, e.g. the shared-memory ring) only steps.
-    if (s.camera_index == frame->camera_index && s.link) s.link->OfferFrame(frame);
+    if (s.camera_index != frame->camera_index || !s.link || !Due(s)) continue;
+    s.link->OfferFrame(frame);
+    if (s.min_interval_ns > 0) {
+      // Keep the cap's phase while frames come often enough; after a gap (a
+      // paused lockstep simulation) start again from now, without a burst.
+      const bool in_phase = now_ns_ - s.next_due_ns < s.min_interval_ns;
+      s.next_due_ns = (in_phase ? s.next_due_ns : now_ns_) + s.min_interval_ns;
+    }
   }
 }
 

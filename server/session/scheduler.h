@@ -2,6 +2,7 @@
 // Lives on the sim thread only.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -15,8 +16,12 @@ namespace sim4cv::session {
 class Scheduler {
  public:
   // `gate` (may be null) tells whether the client's lockstep mailbox is full.
+  // `min_interval_ns` (Subscribe.max_fps as a period; newest and on-request
+  // only): the subscriber wants a frame at most that often, by the clock
+  // BeginFrame gives; 0: every frame.
   void Subscribe(ClientId client, uint32_t camera_index, proto::Delivery delivery, channels::ChannelSet channels,
-                 std::shared_ptr<ClientLink> link, std::shared_ptr<const MailboxGate> gate = nullptr);
+                 std::shared_ptr<ClientLink> link, std::shared_ptr<const MailboxGate> gate = nullptr,
+                 int64_t min_interval_ns = 0);
   // One Step from a lockstep subscriber: one credit. Others are ignored (the
   // transport has already refused them).
   void AddStep(ClientId client);
@@ -31,6 +36,14 @@ class Scheduler {
   bool LockstepReady() const;
   // Takes one credit from every lockstep subscriber.
   void ConsumeSteps();
+
+  // The wall clock for this frame's rate-capped subscriptions: whether each
+  // is due (ChannelsWanted leaves out those that are not, Deliver skips
+  // them). Only what such a subscriber is sent depends on it, never what
+  // any frame holds or when a lockstep simulation steps.
+  void BeginFrame(std::chrono::steady_clock::time_point now) {
+    now_ns_ = std::chrono::duration_cast<std::chrono::nanoseconds>(now.time_since_epoch()).count();
+  }
 
   // Whether anyone wants frames of this camera.
   bool CameraWanted(uint32_t camera_index) const { return ChannelsWanted(camera_index) != 0; }
@@ -82,15 +95,19 @@ class Scheduler {
     uint64_t step_credits = 0;
     std::shared_ptr<ClientLink> link;
     std::shared_ptr<const MailboxGate> gate;
+    int64_t min_interval_ns = 0;  // 0: every frame
+    int64_t next_due_ns = 0;      // rate-capped: no frame before this
   };
+  bool Due(const Subscription& s) const { return s.min_interval_ns == 0 || now_ns_ >= s.next_due_ns; }
   Subscription* Find(ClientId client);
-  void OfferToSubscribers(const FrameRef& frame) const;
+  void OfferToSubscribers(const FrameRef& frame);
   bool Dead(uint32_t camera_index) const { return camera_index < dead_cameras_.size() && dead_cameras_[camera_index]; }
 
   std::vector<Subscription> subscriptions_;  // ordered by client id
   ClientLink* observer_ = nullptr;
   std::vector<FrameRef> held_;      // frames awaiting ReleaseFrames; keeps its capacity
   std::vector<bool> dead_cameras_;  // by camera index; missing: alive
+  int64_t now_ns_ = 0;              // BeginFrame's
 };
 
 }  // namespace sim4cv::session

@@ -30,6 +30,13 @@ struct CarCommand {
   float throttle = 0.0f;  // 0 .. 1
   float brake = 0.0f;     // 0 .. 1
   bool manual = false;
+  // Set by a client's Controls (and cleared when --controls-timeout-ms
+  // braked the car): only then does the timeout watch the car, so a spawned
+  // car parked with manual brakes is never "timed out". In State, not in the
+  // sim thread, so that the timeout is measured in simulation time and a
+  // lockstep run repeats exactly.
+  bool from_controls = false;
+  double controls_time = 0.0;  // State::sim_time when the last Controls were applied
 };
 
 // What a UAV's position-hold controller is asked to do.
@@ -44,14 +51,14 @@ struct UavOrder {
   // run repeats exactly.
   struct Track {
     // The camera the boxes are in (copied at the order: the servo needs no scene).
-    double fov_y = 1.047;        // rad
-    double pitch_down = 1.047;   // rad below the horizon (a gimbal holds it)
-    double altitude = 15.0;      // m above the ground to hold
-    double distance = 0.0;       // m behind the target to hold; 0: where the camera centre looks
+    double fov_y = 1.047;       // rad
+    double pitch_down = 1.047;  // rad below the horizon (a gimbal holds it)
+    double altitude = 15.0;     // m above the ground to hold
+    double distance = 0.0;      // m behind the target to hold; 0: where the camera centre looks
     // Memory: the target's estimated position and velocity on the ground
     // (world frame), from the newest box used.
-    uint64_t frame = 0;          // the report's frame_id; 0: none yet
-    double time = 0.0;           // sim_time the report came
+    uint64_t frame = 0;  // the report's frame_id; 0: none yet
+    double time = 0.0;   // sim_time the report came
     Eigen::Vector2d target = Eigen::Vector2d::Zero();
     Eigen::Vector2d velocity = Eigen::Vector2d::Zero();
   };
@@ -65,7 +72,6 @@ struct UavOrder {
   double yaw_rate = 0.0;                               // kVelocity, rad/s
   Track track;                                         // kTrack
 };
-
 
 // One simulated vehicle or person: the scene's target car and camera UAV,
 // and any a client spawned. Its id is also its instance id in masks and boxes.
@@ -99,7 +105,7 @@ struct State {
   uint64_t frame_id = 0;                       // frames completed; frame N is rendered after N frame periods
   uint64_t physics_steps = 0;                  // substeps taken since start
   double sim_time = 0.0;                       // seconds
-  std::vector<Entity> entities;                   // ordered by id
+  std::vector<Entity> entities;                // ordered by id
   traffic::TrafficState traffic;               // the map's moving cars and walkers (empty without traffic)
   std::vector<TrackerReport> tracker_reports;  // one per client that reported, ordered by client id
 

@@ -12,12 +12,15 @@
 namespace sim4cv::transport {
 namespace {
 
-using google::protobuf::io::CodedOutputStream;
 using google::protobuf::internal::WireFormatLite;
+using google::protobuf::io::CodedOutputStream;
 
-constexpr uint32_t kEnvelopeFrameTag = WireFormatLite::MakeTag(proto::Envelope::kFrameFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
-constexpr uint32_t kFrameImagesTag = WireFormatLite::MakeTag(proto::Frame::kImagesFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
-constexpr uint32_t kImageDataTag = WireFormatLite::MakeTag(proto::Image::kDataFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
+constexpr uint32_t kEnvelopeFrameTag =
+    WireFormatLite::MakeTag(proto::Envelope::kFrameFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
+constexpr uint32_t kFrameImagesTag =
+    WireFormatLite::MakeTag(proto::Frame::kImagesFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
+constexpr uint32_t kImageDataTag =
+    WireFormatLite::MakeTag(proto::Image::kDataFieldNumber, WireFormatLite::WIRETYPE_LENGTH_DELIMITED);
 
 void AppendVarint(std::string& out, uint32_t value) {
   uint8_t buffer[5];
@@ -77,8 +80,10 @@ void FillObject(const render::ObjectGroundTruth& object, proto::ObjectGroundTrut
   out.set_has_visible_box(object.has_visible_box);
 }
 
-void FillMeta(const session::Frame& frame, const std::string& camera_name, bool with_boxes, bool with_state,
-              uint64_t dropped, proto::Frame& meta) {
+}  // namespace
+
+void FillFrameMeta(const session::Frame& frame, const std::string& camera_name, bool with_boxes, bool with_state,
+                   uint64_t dropped, proto::Frame& meta) {
   meta.set_frame_id(frame.frame_id);
   meta.set_sim_time(frame.sim_time);
   meta.set_camera(camera_name);
@@ -102,6 +107,8 @@ void FillMeta(const session::Frame& frame, const std::string& camera_name, bool 
   FillCamera(frame.intrinsics, frame.camera_pose, meta);
   for (const auto& object : frame.objects) FillObject(object, *meta.add_objects());
 }
+
+namespace {
 
 // A small frame's meta (no objects, a short State) fits well inside.
 constexpr std::size_t kFirstArenaBlockBytes = 16 * 1024;
@@ -131,11 +138,12 @@ void FrameEncoder::Encode(const session::Frame& frame, const session::ClientSess
 }
 
 void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera_name,
-                          const proto::Subscribed& subscription, bool with_state, uint64_t dropped, bool length_prefix) {
+                          const proto::Subscribed& subscription, bool with_state, uint64_t dropped,
+                          bool length_prefix) {
   bool with_boxes = false;
   for (int channel : subscription.channels()) with_boxes = with_boxes || channel == proto::CHANNEL_BOXES;
   proto::Frame& meta = FreshMeta();
-  FillMeta(frame, camera_name, with_boxes, with_state, dropped, meta);
+  FillFrameMeta(frame, camera_name, with_boxes, with_state, dropped, meta);
 
   // Pass 1: sizes, since each length-delimited field is preceded by its size.
   const std::size_t pixel_count = static_cast<std::size_t>(frame.width) * frame.height;
@@ -153,7 +161,8 @@ void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera
     SIM4CV_DEMAND(pixels.data != nullptr && image_count < kMax);
     FillImageHeader(*info, frame.width, image_);
     const std::size_t data_size = pixel_count * info->bytes_per_pixel;
-    const std::size_t image_body = image_.ByteSizeLong() + VarintSize(kImageDataTag) + VarintSize(data_size) + data_size;
+    const std::size_t image_body =
+        image_.ByteSizeLong() + VarintSize(kImageDataTag) + VarintSize(data_size) + data_size;
     frame_body += VarintSize(kFrameImagesTag) + VarintSize(image_body) + image_body;
     image_header_size[image_count] = image_body - data_size;
     image_data_size[image_count] = data_size;
@@ -192,7 +201,8 @@ void FrameEncoder::Encode(const session::Frame& frame, const std::string& camera
     segments_[segment_count_++] = {pixel_channels[i].data, image_data_size[i]};
     start = header_end[i];
   }
-  if (start < headers_.size() || segment_count_ == 0) segments_[segment_count_++] = {header_bytes + start, headers_.size() - start};
+  if (start < headers_.size() || segment_count_ == 0)
+    segments_[segment_count_++] = {header_bytes + start, headers_.size() - start};
   total_size_ = headers_.size();
   for (std::size_t i = 0; i < image_count; ++i) total_size_ += image_data_size[i];
   SIM4CV_ASSERT(total_size_ == envelope_size + (length_prefix ? wire::kLengthPrefixBytes : 0));

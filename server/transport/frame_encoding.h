@@ -22,6 +22,13 @@
 
 namespace sim4cv::transport {
 
+// A Frame's fields but its images, as every transport sends them: with
+// `with_boxes` (the subscription has CHANNEL_BOXES) its boxes, camera and
+// objects; with `with_state` the entities' State; `dropped` is
+// Frame.dropped_frames.
+void FillFrameMeta(const session::Frame& frame, const std::string& camera_name, bool with_boxes, bool with_state,
+                   uint64_t dropped, proto::Frame& meta);
+
 struct Segment {
   const uint8_t* data = nullptr;
   std::size_t size = 0;
@@ -49,7 +56,7 @@ class FrameEncoder {
   // block grows to the largest frame seen: once warm, encoding allocates nothing.
   std::vector<char> arena_block_;
   std::optional<google::protobuf::Arena> arena_;
-  proto::Image image_;  // reused: one image's header fields
+  proto::Image image_;   // reused: one image's header fields
   std::string headers_;  // every non-pixel byte, in wire order
   // A header before each image's pixels, then the tail.
   std::array<Segment, 2 * channels::kPixelChannelCount + 1> segments_{};

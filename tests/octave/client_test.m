@@ -62,7 +62,11 @@ function check_transport(name, address, index)
   car = s.entities(strcmp({s.entities.name}, 'car'));
   check(numel(car) == 1 && car.id == 1 && strcmp(car.kind, 'car') && numel(car.position) == 3, '%s: the car in State', name);
 
-  sim4cv_controls(h, 1, 0, 0, 1);   % brake the car (no error expected)
+  % Each transport drives a car of its own: a car takes Controls from one
+  % client at a time, and a UDP client that stops (there is no goodbye)
+  % keeps its car until its registration lapses or its Controls time out.
+  car_id = sim4cv_spawn(h, 'car', sprintf('octave_car_%s', name), 10 * index - 20, -25, 0);
+  sim4cv_controls(h, car_id, 0, 0, 1);   % brake it (no error expected)
   sim4cv_frame(h, 'step');
 
   uav_name = sprintf('octave_uav_%s', name);

@@ -115,6 +115,19 @@ def test_query_road_on_a_map(connect):
         assert math.hypot(b.x - a.x, b.y - a.y) == pytest.approx(2.0, abs=0.05), left
 
 
+def test_map_text_and_the_shipped_maps(connect):
+    client = connect("configure")
+    assert client.get_map_text() == ""  # the default scene is a scene file, not a map
+    maps = client.list_maps()
+    assert {"tracking/easy_desert", "driving/test/01_urban"} <= set(maps) and maps == sorted(maps), maps
+    client.load_map_by_name("tracking/easy_desert")
+    text = client.get_map_text()
+    assert text.startswith("sim4cv-map 1") and "name tracking_easy_desert" in text and "route loop closed" in text
+    # The canonical text: loading it gives the same map back, word for word.
+    assert client.load_map_text(text).scene_name == "tracking_easy_desert"
+    assert client.get_map_text() == text
+
+
 def test_configure_errors_name_the_problem(connect):
     client = connect("configure")
     refused(lambda: client.load_map_text("sim4cv-map 1\nname broken\ncolour red\n"),

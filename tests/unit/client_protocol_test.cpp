@@ -122,8 +122,8 @@ class ClientProtocolTest : public ::testing::Test {
   void ExpectError(Outcome outcome, proto::ErrorCode code, bool fatal, std::vector<std::string> parts) {
     EXPECT_EQ(outcome, fatal ? Outcome::kReplyAndClose : Outcome::kReply);
     ASSERT_TRUE(reply_.has_error()) << reply_.DebugString();
-    EXPECT_EQ(reply_.error().code(), code) << proto::ErrorCode_Name(reply_.error().code()) << ": "
-                                           << reply_.error().message();
+    EXPECT_EQ(reply_.error().code(), code)
+        << proto::ErrorCode_Name(reply_.error().code()) << ": " << reply_.error().message();
     EXPECT_EQ(reply_.error().fatal(), fatal);
     for (const auto& part : parts) {
       EXPECT_NE(reply_.error().message().find(part), std::string::npos)
@@ -220,8 +220,7 @@ TEST_F(ClientProtocolTest, ServerOnlyMessagesAreFatal) {
   const char* fields[] = {"field 2 ", "field 4 ", "field 6 ", "field 10 ", "field 11 ", "field 12 ", "field 14 "};
   for (std::size_t i = 0; i < server_only.size(); ++i) {
     SCOPED_TRACE(fields[i]);
-    ExpectError(Send(server_only[i]), proto::ERROR_CODE_UNEXPECTED_MESSAGE, true,
-                {fields[i], "only the server sends"});
+    ExpectError(Send(server_only[i]), proto::ERROR_CODE_UNEXPECTED_MESSAGE, true, {fields[i], "only the server sends"});
   }
 }
 
@@ -237,8 +236,7 @@ TEST_F(ClientProtocolTest, UnknownCameraListsTheScenesCameras) {
 
 TEST_F(ClientProtocolTest, EmptyChannelsAreRefused) {
   Handshake();
-  ExpectError(Send(Subscribe("uav", {})), proto::ERROR_CODE_INVALID_ARGUMENT, false,
-              {"Subscribe.channels is empty"});
+  ExpectError(Send(Subscribe("uav", {})), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"Subscribe.channels is empty"});
 }
 
 TEST_F(ClientProtocolTest, OutOfRangeChannelsAreRefused) {
@@ -267,6 +265,26 @@ TEST_F(ClientProtocolTest, UnspecifiedOrUnknownDeliveryIsRefused) {
               {"Subscribe.delivery is 0", "DELIVERY_LOCKSTEP (1), DELIVERY_NEWEST (2) or DELIVERY_ON_REQUEST (3)"});
   ExpectError(Send(Subscribe("uav", {proto::CHANNEL_RGB}, static_cast<proto::Delivery>(7))),
               proto::ERROR_CODE_INVALID_ARGUMENT, false, {"Subscribe.delivery is 7"});
+}
+
+// Subscribe.max_fps: a period for the sim thread's scheduler, echoed in
+// Subscribed; out of range or on a lockstep subscription, an Error naming it.
+TEST_F(ClientProtocolTest, MaxFpsCapsNewestSubscriptionsOnly) {
+  Handshake();
+  proto::Envelope capped = Subscribe("uav", {proto::CHANNEL_RGB});
+  capped.mutable_subscribe()->set_max_fps(30);
+  ASSERT_EQ(Send(capped), Outcome::kReply);
+  EXPECT_EQ(reply_.subscribed().max_fps(), 30);
+  const std::vector<Command> commands = Drain();
+  ASSERT_EQ(commands.size(), 1u);
+  EXPECT_EQ(std::get<SubscribeCommand>(commands[0].body).min_interval_ns, 33'333'333);
+  for (const double bad : {-1.0, 1001.0, std::nan("")}) {
+    capped.mutable_subscribe()->set_max_fps(bad);
+    ExpectError(Send(capped), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"Subscribe.max_fps is", "1000"});
+  }
+  proto::Envelope lockstep = Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_LOCKSTEP);
+  lockstep.mutable_subscribe()->set_max_fps(30);
+  ExpectError(Send(lockstep), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"max_fps", "lockstep subscriber"});
 }
 
 TEST_F(RealtimeClientProtocolTest, LockstepDeliveryInRealtimeModeIsRefused) {
@@ -435,9 +453,8 @@ TEST_F(ClientProtocolTest, ControlsAndTrackerOutputsPastTheQueueBoundAreDroppedW
     EXPECT_EQ(outcome, Outcome::kReply);
     EXPECT_EQ(reply_.error().code(), proto::ERROR_CODE_INVALID_STATE);
     EXPECT_FALSE(reply_.error().fatal());
-    for (const std::string& part :
-         {"this " + what + " was dropped", std::string("16384 commands already wait"),
-          std::string("limits::kMaxQueuedCommands")}) {
+    for (const std::string& part : {"this " + what + " was dropped", std::string("16384 commands already wait"),
+                                    std::string("limits::kMaxQueuedCommands")}) {
       EXPECT_NE(reply_.error().message().find(part), std::string::npos) << reply_.error().message();
     }
   };

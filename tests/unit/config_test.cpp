@@ -97,7 +97,8 @@ TEST(ConfigTest, EachFlagParses) {
   EXPECT_EQ(Parse({"--shm-camera", "front"}).shm_camera, "front");
   EXPECT_EQ(Parse({"--shm-slots", "2"}).shm_slots, 2u);
   EXPECT_EQ(Parse({"--shm-channels", "rgb"}).shm_channel_mask, 1u << proto::CHANNEL_RGB);
-  for (const char* level : {"debug", "info", "warning", "error"}) EXPECT_EQ(Parse({"--log-level", level}).log_level, level);
+  for (const char* level : {"debug", "info", "warning", "error"})
+    EXPECT_EQ(Parse({"--log-level", level}).log_level, level);
 }
 
 TEST(ConfigTest, ManyFlagsTogetherAndTheLastWins) {
@@ -146,6 +147,17 @@ TEST(ConfigTest, TrafficFlags) {
   ExpectMentions(ParseError({"--traffic-cars", "-3"}), {"--traffic-cars", "-3"});
 }
 
+TEST(ConfigTest, ControlsTimeout) {
+  EXPECT_EQ(Parse({}).controls_timeout_ms, 1000u);
+  EXPECT_EQ(Parse({"--controls-timeout-ms", "500"}).controls_timeout_ms, 500u);
+  EXPECT_EQ(Parse({"--controls-timeout-ms", "0"}).controls_timeout_ms, 0u) << "0 turns it off";
+  ExpectMentions(ParseError({"--controls-timeout-ms", "-1"}), {"--controls-timeout-ms is -1", "[0, 86400000]"});
+  ExpectMentions(ParseError({"--controls-timeout-ms", "soon"}), {"--controls-timeout-ms expects a number, got 'soon'"});
+  ExpectMentions(ParseError({"--controls-timeout-ms", "1.5"}), {"--controls-timeout-ms", "'1.5'"});
+  ExpectMentions(ParseError({"--controls-timeout-ms", "86400001"}), {"--controls-timeout-ms is 86400001"});
+  ExpectMentions(HelpText(), {"--controls-timeout-ms N", "(default 1000; 0 = never)"});
+}
+
 TEST(ConfigTest, MapsDirForLoadMap) {
   EXPECT_NE(Parse({}).maps_dir.find("scenes"), std::string::npos);
   EXPECT_EQ(Parse({"--maps-dir", "/srv/maps"}).maps_dir, "/srv/maps");
@@ -156,12 +168,42 @@ TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
     std::string help;
     const auto config = ParseFlags({"--width", "100", flag}, help);
     EXPECT_FALSE(config.has_value());
-    ExpectMentions(help, {"--scene", "--seed", "--bind", "--tcp-port", "--physics-hz", "--frame-hz", "--width",
-                          "--height", "--mode", "--max-message-bytes", "--max-clients", "--tcp-send-buffer", "--udp-port", "--udp-datagram-bytes",
-                          "--udp-expiry-ms", "--shm-name", "--shm-camera", "--shm-slots", "--shm-channels", "--log-level", "--log ", "--log-label",
-                          "--replay", "--replay-only", "--maps-dir", "--traffic-cars", "--traffic-parked",
-                          "--traffic-pedestrians", "--traffic-lights", "--traffic-green", "--traffic-seed", "--help",
-                          "lockstep", "realtime", "--handshake-timeout-ms", "--message-timeout-ms",
+    ExpectMentions(help, {"--scene",
+                          "--seed",
+                          "--bind",
+                          "--tcp-port",
+                          "--physics-hz",
+                          "--frame-hz",
+                          "--width",
+                          "--height",
+                          "--mode",
+                          "--max-message-bytes",
+                          "--max-clients",
+                          "--tcp-send-buffer",
+                          "--udp-port",
+                          "--udp-datagram-bytes",
+                          "--udp-expiry-ms",
+                          "--shm-name",
+                          "--shm-camera",
+                          "--shm-slots",
+                          "--shm-channels",
+                          "--log-level",
+                          "--log ",
+                          "--log-label",
+                          "--replay",
+                          "--replay-only",
+                          "--maps-dir",
+                          "--traffic-cars",
+                          "--traffic-parked",
+                          "--traffic-pedestrians",
+                          "--traffic-lights",
+                          "--traffic-green",
+                          "--traffic-seed",
+                          "--help",
+                          "lockstep",
+                          "realtime",
+                          "--handshake-timeout-ms",
+                          "--message-timeout-ms",
                           "--idle-timeout-ms"});
     EXPECT_EQ(help, HelpText());
   }
@@ -187,7 +229,8 @@ TEST(ConfigTest, ConditionsFlags) {
   ExpectMentions(ParseError({"--hour", "25"}), {"--hour is 25", "[0, 24]"});
   ExpectMentions(ParseError({"--hour", "-1"}), {"--hour"});
   ExpectMentions(ParseError({"--quality", "medium"}), {"--quality 'medium' is not a quality", "full or fast"});
-  const Config noisy = Parse({"--noise-read", "2.5", "--noise-shot", "1", "--randomize", "9", "--randomize-every", "30"});
+  const Config noisy =
+      Parse({"--noise-read", "2.5", "--noise-shot", "1", "--randomize", "9", "--randomize-every", "30"});
   EXPECT_EQ(noisy.conditions.noise_read, 2.5);
   EXPECT_EQ(noisy.conditions.noise_shot, 1.0);
   EXPECT_EQ(noisy.randomize_seed, 9u);
@@ -255,8 +298,9 @@ TEST(ConfigTest, ShmChannels) {
             (1u << proto::CHANNEL_RGB) | (1u << proto::CHANNEL_MASK));
   EXPECT_EQ(Parse({"--shm-channels", "depth"}).shm_channel_mask, 1u << proto::CHANNEL_DEPTH);
   // Each refusal names the flag, the value and what is wrong with it.
-  ExpectMentions(ParseError({"--shm-channels", "rgb,boxes"}),
-                 {"--shm-channels is 'rgb,boxes'", "'boxes' is not a channel", "use rgb,depth,mask,semantic,normals,flow"});
+  ExpectMentions(
+      ParseError({"--shm-channels", "rgb,boxes"}),
+      {"--shm-channels is 'rgb,boxes'", "'boxes' is not a channel", "use rgb,depth,mask,semantic,normals,flow"});
   ExpectMentions(ParseError({"--shm-channels", "RGB"}), {"--shm-channels is 'RGB'", "'RGB' is not a channel"});
   ExpectMentions(ParseError({"--shm-channels", "rgb, depth"}), {"--shm-channels", "' depth' is not a channel"});
   ExpectMentions(ParseError({"--shm-channels", ""}), {"--shm-channels is ''", "'' is not a channel"});
@@ -267,9 +311,7 @@ TEST(ConfigTest, ShmChannels) {
 // BUG: --shm-name (server/daemon/config.cpp) accepts "/" (non-empty, no '/'
 // after the first character) and stores shm_name "/", a name with nothing
 // after the slash that shm_open refuses (EINVAL) only later, at startup.
-TEST(ConfigTest, BareSlashShmNameIsRefused) {
-  ExpectMentions(ParseError({"--shm-name", "/"}), {"--shm-name"});
-}
+TEST(ConfigTest, BareSlashShmNameIsRefused) { ExpectMentions(ParseError({"--shm-name", "/"}), {"--shm-name"}); }
 
 TEST(ConfigTest, NegativeNumbersAreRefused) {
   // These wrap (see below) to values beyond the range, so the range check
@@ -283,9 +325,7 @@ TEST(ConfigTest, NegativeNumbersAreRefused) {
 // setting failbit; when the wrapped value lands inside [low, high] the flag is
 // accepted: `--seed -1` becomes seed 18446744073709551615, `--tcp-port -1`
 // becomes port 65535, `--max-message-bytes -4294967280` becomes 16.
-TEST(ConfigTest, NegativeSeedIsRefused) {
-  ExpectMentions(ParseError({"--seed", "-1"}), {"--seed", "-1"});
-}
+TEST(ConfigTest, NegativeSeedIsRefused) { ExpectMentions(ParseError({"--seed", "-1"}), {"--seed", "-1"}); }
 
 TEST(ConfigTest, NegativeTcpPortIsRefused) {
   // BUG: see NegativeSeedIsRefused; -1 wraps to 65535 in a uint16.

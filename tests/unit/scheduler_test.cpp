@@ -249,8 +249,8 @@ TEST_F(SchedulerTest, DeliverReachesOnlyThatCamerasSubscribersInClientIdOrder) {
   scheduler_.Deliver(MakeFrame(100, 0));
   scheduler_.Deliver(MakeFrame(101, 1));
   scheduler_.Deliver(MakeFrame(102, 0));
-  const std::vector<std::pair<int, uint64_t>> expected = {
-      {1, 100}, {5, 100}, {9, 100}, {2, 101}, {1, 102}, {5, 102}, {9, 102}};
+  const std::vector<std::pair<int, uint64_t>> expected = {{1, 100}, {5, 100}, {9, 100}, {2, 101},
+                                                          {1, 102}, {5, 102}, {9, 102}};
   EXPECT_EQ(delivery_log_, expected);
   EXPECT_EQ(c2->frames, std::vector<uint64_t>{101});
   EXPECT_EQ(c9->frames, (std::vector<uint64_t>{100, 102}));
@@ -301,6 +301,60 @@ TEST_F(SchedulerTest, AnObserverSeesFramesFirstAndSubscribersOnlyAtRelease) {
   scheduler_.SetObserver(nullptr);
   scheduler_.Deliver(MakeFrame(8, 0));
   EXPECT_EQ(client->frames, (std::vector<uint64_t>{7, 8}));
+}
+
+}  // namespace
+}  // namespace sim4cv::session
+
+namespace sim4cv::session {
+namespace {
+
+// Subscribe.max_fps: a rate-capped viewer wants (and is sent) a frame only
+// when due by the wall clock BeginFrame gives, whatever the frame rate; the
+// lockstep subscriber beside it gets every frame and steps as before.
+TEST_F(SchedulerTest, RateCappedViewerIsRenderedForAndSentOnlyWhenDue) {
+  using std::chrono::milliseconds;
+  constexpr channels::ChannelSet kDepth = channels::Bit(proto::CHANNEL_DEPTH);
+  auto stepper = Link(1);
+  auto viewer = Link(2);
+  scheduler_.Subscribe(1, 0, proto::DELIVERY_LOCKSTEP, kRgb, stepper);
+  scheduler_.Subscribe(2, 1, proto::DELIVERY_NEWEST, kDepth, viewer, nullptr, 100'000'000);  // 10 fps
+  std::chrono::steady_clock::time_point now{};
+  int rendered_for_viewer = 0;
+  for (uint64_t frame = 1; frame <= 50; ++frame) {  // 50 frames at 100 fps: half a second
+    scheduler_.BeginFrame(now);
+    EXPECT_TRUE(scheduler_.CameraWanted(0));
+    if (scheduler_.CameraWanted(1)) {
+      EXPECT_EQ(scheduler_.ChannelsWanted(1) & kDepth, kDepth);
+      ++rendered_for_viewer;
+      scheduler_.Deliver(MakeFrame(frame, 1));
+    }
+    scheduler_.Deliver(MakeFrame(frame, 0));
+    now += milliseconds(10);
+  }
+  EXPECT_EQ(rendered_for_viewer, 5);
+  EXPECT_EQ(viewer->frames, (std::vector<uint64_t>{1, 11, 21, 31, 41}));
+  EXPECT_EQ(stepper->frames.size(), 50u);
+
+  // After a pause (a lockstep simulation waiting for Steps) the cap starts
+  // again from now: one frame, not a burst to catch up.
+  now += milliseconds(2000);
+  for (uint64_t frame = 51; frame <= 53; ++frame) {
+    scheduler_.BeginFrame(now);
+    if (scheduler_.CameraWanted(1)) scheduler_.Deliver(MakeFrame(frame, 1));
+    now += milliseconds(10);
+  }
+  EXPECT_EQ(viewer->frames.back(), 51u);
+  EXPECT_EQ(viewer->frames.size(), 6u);
+
+  // A frame of its camera rendered for someone else is not sent before it is due either.
+  auto other = Link(3);
+  scheduler_.Subscribe(3, 1, proto::DELIVERY_NEWEST, kRgb, other);
+  scheduler_.BeginFrame(now);
+  EXPECT_EQ(scheduler_.ChannelsWanted(1) & kDepth, 0u);
+  scheduler_.Deliver(MakeFrame(54, 1));
+  EXPECT_EQ(other->frames.back(), 54u);
+  EXPECT_EQ(viewer->frames.back(), 51u);
 }
 
 }  // namespace

@@ -148,6 +148,16 @@ class WorldRequests:
         """The WorldInfo: scene name, entities, cameras, routes, frame id."""
         return self._configure_world(get_world=pb.GetWorld())
 
+    def get_map_text(self):
+        """The loaded map in the canonical map text format (docs/maps.md);
+        "" when the world is a scene file, not a map."""
+        return self.configure(pb.Configure(get_world=pb.GetWorld(with_map_text=True))).map_text
+
+    def list_maps(self):
+        """The names load_map_by_name takes: every map under the daemon's
+        --maps-dir, e.g. "tracking/easy_urban", sorted."""
+        return list(self.configure(pb.Configure(list_maps=pb.ListMaps())).maps)
+
     def query_road(self, x, y, count=0, step=0.0, heading_deg=None):
         """Map scenes only: the nearest lane point to (x, y) (only lanes
         within 90 degrees of heading_deg, if given) and `count` points every

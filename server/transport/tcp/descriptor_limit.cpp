@@ -7,8 +7,8 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "server/common/limits.h"
 #include "server/common/diagnostics.h"
+#include "server/common/limits.h"
 
 namespace sim4cv::transport {
 namespace {
@@ -18,6 +18,10 @@ std::string Text(rlim_t value) { return value == RLIM_INFINITY ? "unlimited" : s
 }  // namespace
 
 void EnsureDescriptorsFor(uint32_t max_clients) {
+  EnsureDescriptorsFor(max_clients, "--max-clients " + std::to_string(max_clients));
+}
+
+void EnsureDescriptorsFor(uint32_t max_clients, const std::string& flags) {
   rlimit limit{};
   if (getrlimit(RLIMIT_NOFILE, &limit) != 0) {
     throw std::runtime_error(std::string("cannot read the file descriptor limit (RLIMIT_NOFILE): ") +
@@ -29,8 +33,7 @@ void EnsureDescriptorsFor(uint32_t max_clients) {
     const rlim_t before = limit.rlim_cur;
     limit.rlim_cur = need;
     if (setrlimit(RLIMIT_NOFILE, &limit) == 0) {
-      LOG_INFO("raised the file descriptor limit from " << before << " to " << need << " for --max-clients "
-                                                        << max_clients);
+      LOG_INFO("raised the file descriptor limit from " << before << " to " << need << " for " << flags);
       return;
     }
     limit.rlim_cur = before;
@@ -38,10 +41,11 @@ void EnsureDescriptorsFor(uint32_t max_clients) {
   const rlim_t hard = limit.rlim_max;
   std::string advice = "raise the limit (ulimit -n)";
   if (hard != RLIM_INFINITY && hard > limits::kReservedDescriptors) {
-    advice = "lower --max-clients to at most " + std::to_string(hard - limits::kReservedDescriptors) + ", or " + advice;
+    const std::string which = flags.find(" plus ") == std::string::npos ? "--max-clients" : "them";
+    advice = "lower " + which + " to at most " + std::to_string(hard - limits::kReservedDescriptors) +
+             (which == "them" ? " in all" : "") + ", or " + advice;
   }
-  throw std::runtime_error("--max-clients " + std::to_string(max_clients) + " needs " + std::to_string(need) +
-                           " file descriptors (one per connection plus " +
+  throw std::runtime_error(flags + " needs " + std::to_string(need) + " file descriptors (one per connection plus " +
                            std::to_string(limits::kReservedDescriptors) +
                            " for the daemon's own), but the descriptor limit (RLIMIT_NOFILE) is " +
                            Text(limit.rlim_cur) + ", hard limit " + Text(hard) + "; " + advice);

@@ -12,6 +12,10 @@ namespace sim4cv::transport {
 // under the soft descriptor limit, raising it towards the hard limit if
 // needed. Throws std::runtime_error naming both numbers if they cannot fit.
 void EnsureDescriptorsFor(uint32_t max_clients);
+// The same for `connections` promised by several flags (the studio's HTTP
+// port adds its --http-max-clients to TCP's): `flags` names them, e.g.
+// "--max-clients 64 plus --http-max-clients 32".
+void EnsureDescriptorsFor(uint32_t connections, const std::string& flags);
 
 // "N descriptors open, limit M": for the log when accept() fails.
 std::string DescriptorUsage();

@@ -1,0 +1,77 @@
+"""Sets the goal column of a driving dataset from its routes' junctions
+(docs/driving.md, "Goals at junctions"), without rendering again:
+
+    python3 -m sim4cv.driving relabel --dataset DIR [--seed S]
+
+The driving maps' routes turn at junctions (crossroads, T-junctions) where
+the road also goes on: from the image alone the way is ambiguous, so the
+network takes the goal input (-1 left, 0 straight, +1 right) that the
+paper's guided driving uses. A lane pose within GOAL_BEFORE_M before a
+junction of its route, or in it, gets the direction the route takes there
+(sim4cv.driving_guided.MapGoals); elsewhere a seeded random goal, so the
+network learns to ignore the goal where there is no choice. Every view of
+a lane pose (the original and its augmented views) gets the pose's goal.
+labels.csv is rewritten (the old one kept as labels.csv.bak), the parts too.
+"""
+
+import csv
+import math
+import os
+import shutil
+from typing import Dict, Optional
+
+from . import driving_dataset as dd
+from . import driving_metrics as dm
+
+
+def relabel(folder: str, seed: int = 0, log=print) -> Dict[str, int]:
+    from .driving_guided import MapGoals
+    import json
+    with open(os.path.join(folder, "dataset.json")) as f:
+        meta = json.load(f)
+    paths = {dd.parse_map(p)["name"]: p for p in meta["settings"]["maps"]}
+    with open(os.path.join(folder, "labels.csv"), newline="") as f:
+        reader = csv.DictReader(f)
+        columns, rows = reader.fieldnames, list(reader)
+    goals_of, lanes, poses = {}, {}, {}
+    for r in rows:  # the lane pose of each sample: its original view
+        if float(r["offset_side_m"]) == 0.0 and float(r["offset_yaw_deg"]) == 0.0:
+            poses[(r["map"], r["route"], r["sample"])] = (float(r["view_x"]), float(r["view_y"]))
+    counts = {-1: 0, 0: 0, 1: 0, "junction": 0}
+    for r in rows:
+        key = (r["map"], r["route"], r["sample"])
+        if r["map"] not in goals_of:
+            goals_of[r["map"]] = MapGoals(paths[r["map"]], seed)
+        if (r["map"], r["route"]) not in lanes:
+            info = dd.parse_map(paths[r["map"]])
+            lanes[(r["map"], r["route"])] = dd.RoutePath(info, r["route"])
+        lane = lanes[(r["map"], r["route"])]
+        x, y = poses[key]
+        u = dm.nearest_u(lane, x, y)
+        maps_goals = goals_of[r["map"]]
+        hit = maps_goals.routes[r["route"]].junction_at(u)
+        goal = maps_goals(r["route"], u)
+        r["goal"] = str(goal)
+        counts[goal] += 1
+        counts["junction"] += hit is not None
+    backup = os.path.join(folder, "labels.csv.bak")
+    if not os.path.exists(backup):
+        shutil.copyfile(os.path.join(folder, "labels.csv"), backup)
+    with open(os.path.join(folder, "labels.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns)
+        w.writeheader()
+        w.writerows(rows)
+    log("%s: %d rows, %d at junctions; goals -1/0/+1: %d/%d/%d"
+        % (folder, len(rows), counts["junction"], counts[-1], counts[0], counts[1]))
+    return counts
+
+
+def main(argv: Optional[list] = None) -> int:
+    import argparse
+    p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving relabel", description=__doc__.split("\n\n")[0])
+    p.add_argument("--dataset", required=True, nargs="+")
+    p.add_argument("--seed", type=int, default=0)
+    a = p.parse_args(argv)
+    for folder in a.dataset:
+        relabel(folder, a.seed)
+    return 0

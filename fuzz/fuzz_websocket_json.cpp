@@ -1,0 +1,48 @@
+// Fuzz target: the WebSocket session's read path (server/transport/http/
+// ws_session.cpp, HandleMessage) without the socket. The input is the text
+// messages a page sends, one per line: each is parsed by EnvelopeFromJson
+// (protobuf's JSON mapping; a failure is a non-fatal Error there) and handed
+// to a fresh ClientProtocol, until the protocol ends the connection. The
+// frames themselves (beast's WebSocket framing) are Boost's, fuzzed there.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+#include "fuzz/fuzz_input.h"
+#include "fuzz/protocol_harness.h"
+#include "server/transport/http/json_envelope.h"
+
+namespace {
+
+using sim4cv::session::ClientProtocol;
+
+sim4cv::fuzz::ProtocolHarness& Harness() {
+  static auto* harness = [] {
+    sim4cv::fuzz::QuietLogs();
+    return new sim4cv::fuzz::ProtocolHarness();
+  }();
+  return *harness;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
+  sim4cv::fuzz::ProtocolHarness& harness = Harness();
+  sim4cv::fuzz::FuzzSession session(harness.context());
+  sim4cv::proto::Envelope request, reply;
+  std::string reply_json;
+  std::string_view input(reinterpret_cast<const char*>(data), size);
+  while (!input.empty()) {
+    const std::size_t end = input.find('\n');
+    const std::string_view message = input.substr(0, end);
+    input = end == std::string_view::npos ? std::string_view() : input.substr(end + 1);
+    ClientProtocol::Outcome outcome = ClientProtocol::Outcome::kReply;  // the Error for bad JSON
+    if (sim4cv::transport::EnvelopeFromJson(message, request).empty()) {
+      outcome = session.protocol.Handle(request, reply);
+      if (outcome != ClientProtocol::Outcome::kNoReply) sim4cv::transport::EnvelopeToJson(reply, reply_json);
+    }
+    harness.DrainCommands();
+    if (outcome == ClientProtocol::Outcome::kReplyAndClose) break;
+  }
+  return 0;
+}
