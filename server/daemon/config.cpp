@@ -255,7 +255,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
        [&](auto& f, auto& v) { config.idle_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
       {"--controls-timeout-ms",
        [&](auto& f, auto& v) { config.controls_timeout_ms = ParseNumber<uint32_t>(f, v, 0, 86400000); }},
-      {"--http-port", [&](auto& f, auto& v) { config.http_port = ParseNumber<int32_t>(f, v, 0, 65535); }},
+      {"--http-port", [&](auto& f, auto& v) { config.http_port = ParseNumber<int32_t>(f, v, -1, 65535); }},
       {"--http-bind", [&](auto&, auto& v) { config.http_bind = v; }},
       {"--http-max-clients",
        [&](auto& f, auto& v) { config.http_max_clients = ParseNumber<uint32_t>(f, v, 1, 100000); }},

@@ -163,6 +163,26 @@ TEST(ConfigTest, MapsDirForLoadMap) {
   EXPECT_EQ(Parse({"--maps-dir", "/srv/maps"}).maps_dir, "/srv/maps");
 }
 
+// The studio's port (docs/studio.md): off unless asked, on loopback unless told.
+TEST(ConfigTest, StudioFlags) {
+  const Config defaults = Parse({});
+  EXPECT_EQ(defaults.http_port, -1);
+  EXPECT_EQ(defaults.http_bind, "127.0.0.1");
+  EXPECT_EQ(defaults.http_max_clients, 32u);
+  EXPECT_NE(defaults.studio_dir.find("studio"), std::string::npos);
+  const Config set = Parse(
+      {"--http-port", "8080", "--http-bind", "0.0.0.0", "--http-max-clients", "200", "--studio-dir", "/srv/studio"});
+  EXPECT_EQ(set.http_port, 8080);
+  EXPECT_EQ(set.http_bind, "0.0.0.0");
+  EXPECT_EQ(set.http_max_clients, 200u);
+  EXPECT_EQ(set.studio_dir, "/srv/studio");
+  EXPECT_EQ(Parse({"--http-port", "0"}).http_port, 0) << "0: any free port";
+  ExpectMentions(ParseError({"--http-port", "65536"}), {"--http-port is 65536", "[-1, 65535]"});
+  ExpectMentions(ParseError({"--http-max-clients", "0"}), {"--http-max-clients is 0"});
+  ExpectMentions(HelpText(), {"--http-port N", "--http-bind ADDRESS", "no authentication", "--http-max-clients N",
+                              "--studio-dir DIR", "http=PORT"});
+}
+
 TEST(ConfigTest, HelpReturnsNulloptWithEveryFlag) {
   for (const char* flag : {"--help", "-h"}) {
     std::string help;

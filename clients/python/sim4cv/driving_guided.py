@@ -6,6 +6,7 @@ car which way to go at the next intersection.
     python3 -m sim4cv.driving_guided generate --maps train --out DIR [driving_dataset's options]
     python3 -m sim4cv.driving_guided evaluate --model OUT/model.pt --maps test --out DIR
     python3 -m sim4cv.driving_guided evaluate --policy reference --maps test --out DIR
+    python3 -m sim4cv.driving_guided probe --model OUT/model.pt --data DIR
 
 * `layout` turns a map of `sim4cv_mapgen` (its roads) into a layout whose
   routes take every turn of every junction (left, straight, right from
@@ -20,6 +21,7 @@ car which way to go at the next intersection.
   its trajectory. guided.json reports the fraction of junctions taken as
   commanded, the deviation from the lane of the road actually taken and
   the lane departures.
+* `probe` checks offline whether a model uses its goal (goal_probe).
 """
 
 import argparse
@@ -338,11 +340,6 @@ def make_routes(grid: RoadGrid, seed: int, existing: Sequence[Sequence] = (), ma
     if missing:
         raise GuidedError("%d junction choices left without a route (max_routes %d)" % (len(missing), max_routes))
     return routes
-
-
-def _plain_exit(grid, tile, entry):
-    options = sorted(x for x in grid.conn[tile] if x != entry)
-    return options[0]
 
 
 def read_routes(path: str) -> Dict[str, Tuple[bool, List[Tuple[int, int]]]]:
