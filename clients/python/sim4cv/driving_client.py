@@ -18,7 +18,6 @@ give --switch-every S: the left lane is driven by mirroring the image and
 the predicted h (driving_eval.NetworkPolicy's lane trick).
 """
 
-import math
 import sys
 import threading
 import time
@@ -124,11 +123,10 @@ def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, 
         if last_id is not None and frame.frame_id > last_id + 1:
             counts["skipped"] += frame.frame_id - last_id - 1
         last_id = frame.frame_id
-        pose = next((e for e in frame.entities if e.id == car_id), None)
+        pose = de.car_pose(frame, car_id)
         if pose is None:
             raise de.EvalError("the frame's state holds no car %d: was it removed?" % car_id)
-        x, y, yaw = pose.position[0], pose.position[1], de.yaw_of(pose.orientation)
-        car_speed = math.hypot(pose.linear_velocity[0], pose.linear_velocity[1])
+        x, y, yaw, car_speed = pose
         if recorder is not None:
             recorder(frame, (x, y, yaw))
         started = time.perf_counter()

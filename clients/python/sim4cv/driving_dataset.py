@@ -361,11 +361,16 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
 def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: str = "random",
              random_views: int = dl.DEFAULT_RANDOM_VIEWS, straight_step: Optional[float] = None,
              turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, conditions: str = "",
-             randomize: int = 0, obstacles: int = 0, log=print) -> dict:
-    """Generates (or resumes) the dataset in `out`; returns dataset.json's content."""
+             randomize: int = 0, obstacles: int = 0, log=print, scenes_dir: Optional[str] = None,
+             goals=None, extra_settings: Optional[dict] = None) -> dict:
+    """Generates (or resumes) the dataset in `out`; returns dataset.json's content.
+    scenes_dir: where the train/val/test sets are (default scenes/driving);
+    goals(map_path) -> goal_fn (generate_map's) whose summary() goes into the
+    map's counts as "goals"; extra_settings: recorded with the settings (and
+    compared on resume). sim4cv.driving_guided uses the three."""
     if views not in dl.VIEW_MODES:
         raise DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
-    resolved = resolve_maps(maps, surroundings)
+    resolved = resolve_maps(maps, surroundings, scenes_dir)
     settings = {
         "format": FORMAT_VERSION, "maps": [p for p, _ in resolved], "surroundings": list(surroundings),
         "views": views, "random_views": random_views if views == "random" else 0,
@@ -377,6 +382,7 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
                          "fixed_offsets_m": list(dl.FIXED_OFFSETS_M), "fixed_yaws_deg": list(dl.FIXED_YAWS_DEG)},
         "turn": {"lookahead_m": TURN_LOOKAHEAD_M, "threshold_deg": TURN_THRESHOLD_DEG},
     }
+    settings.update(extra_settings or {})
     meta = check_out_dir(out, settings)
     names = [parse_map(p)["name"] for p, _ in resolved]
     if meta is None:
@@ -391,7 +397,10 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
         shutil.rmtree(os.path.join(out, "images", name), ignore_errors=True)  # interrupted: redo
         meta["maps"][name] = {"complete": False}
         _write_json(os.path.join(out, "dataset.json"), meta)
-        meta["maps"][name] = generate_map(path, map_set, out, settings, log)
+        goal_fn = goals(path) if goals else None
+        meta["maps"][name] = generate_map(path, map_set, out, settings, log, goal_fn=goal_fn)
+        if goal_fn is not None:
+            meta["maps"][name]["goals"] = goal_fn.summary()
         made += meta["maps"][name]["images"]
         _rebuild_labels(out, meta)
         _update_counts(meta)

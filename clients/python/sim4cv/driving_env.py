@@ -80,7 +80,7 @@ flat-shaded).
 
 import math
 import os
-from typing import Dict, Optional, Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 

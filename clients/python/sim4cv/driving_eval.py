@@ -21,7 +21,7 @@ import json
 import math
 import os
 import time
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Sequence
 
 import numpy as np
 
@@ -45,6 +45,16 @@ def yaw_of(orientation) -> float:
     """Heading (rad, counter-clockwise from east) of a (w, x, y, z) quaternion."""
     w, x, y, z = orientation
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def car_pose(frame, car_id: int):
+    """(x, y, yaw rad, ground speed m/s) of entity car_id in a frame's state
+    (subscribed with_state); None if the frame holds no such entity."""
+    pose = next((e for e in frame.entities if e.id == car_id), None)
+    if pose is None:
+        return None
+    v = pose.linear_velocity
+    return pose.position[0], pose.position[1], yaw_of(pose.orientation), math.hypot(v[0], v[1])
 
 
 # ---------------------------------------------------------------------------
@@ -157,10 +167,7 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     t0 = frame.sim_time
     infer_s = 0.0
     while True:
-        pose = next(e for e in frame.entities if e.id == ego)
-        x, y = pose.position[0], pose.position[1]
-        yaw = yaw_of(pose.orientation)
-        car_speed = math.hypot(pose.linear_velocity[0], pose.linear_velocity[1])
+        x, y, yaw, car_speed = car_pose(frame, ego)
         lane_deviation = progress.update(x, y)
         deviation = path.deviation(progress.u, lane_deviation)
         hit = collisions.update(x, y, yaw)

@@ -230,6 +230,11 @@ class MapGoals:
         self.routes = {r: RouteGoals(info, grid, r, seed, before_m) for r in info["routes"]}
         self.counts = {"junction": 0, "random": 0, -1: 0, 0: 0, 1: 0}
 
+    def summary(self) -> dict:
+        """The counts for dataset.json: lane poses at junctions and away, and per goal."""
+        c = self.counts
+        return {"junction": c["junction"], "random": c["random"], "left": c[-1], "straight": c[0], "right": c[1]}
+
     def __call__(self, route: str, u: float, sample: int = 0) -> int:
         goals = self.routes[route]
         hit = goals.junction_at(u)
@@ -587,7 +592,7 @@ def drive_guided(client, grid: RoadGrid, info: dict, policy, rng, start, junctio
                  render: bool = True, log=print) -> Tuple[dict, list]:
     """One run from `start` (previous tile, start tile) until `junctions`
     junction passages, the car leaving the road, or a time limit."""
-    from .driving_eval import yaw_of
+    from .driving_eval import car_pose
     prev, tile = start
     nav = Navigator(grid, rng, prev, tile)
     first = dd.RoutePath(grid.map_info(nav.planned_tiles()), "path")
@@ -606,10 +611,7 @@ def drive_guided(client, grid: RoadGrid, info: dict, policy, rng, start, junctio
     t0 = frame.sim_time
     infer_s = 0.0
     while True:
-        pose = next(e for e in frame.entities if e.id == ego)
-        x, y = pose.position[0], pose.position[1]
-        yaw = yaw_of(pose.orientation)
-        car_speed = math.hypot(pose.linear_velocity[0], pose.linear_velocity[1])
+        x, y, yaw, car_speed = car_pose(frame, ego)
         nav.update(x, y)
         road = client.query_road(x, y, heading_deg=math.degrees(yaw))
         road_dev = -road.lateral_offset if road.distance <= OFF_ROAD_M else math.copysign(road.distance,
@@ -766,56 +768,13 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
              random_views: int = dl.DEFAULT_RANDOM_VIEWS, straight_step: Optional[float] = None,
              turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0,
              before_m: float = GOAL_BEFORE_M, log=print) -> dict:
-    """driving_dataset.generate with a goal per lane pose (MapGoals); resumes
-    and refuses a DIR of other settings the same way."""
-    if views not in dl.VIEW_MODES:
-        raise dd.DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
-    resolved = resolve_maps(maps, surroundings)
-    settings = {
-        "format": dd.FORMAT_VERSION, "maps": [p for p, _ in resolved], "surroundings": list(surroundings),
-        "views": views, "random_views": random_views if views == "random" else 0,
-        "straight_step": straight_step, "turn_step": turn_step, "max_samples": max_samples, "seed": seed,
-        "conditions": "", "randomize": 0, "obstacles": 0,
-        "camera": dict(dd.CAMERA_SETTINGS, rendered_by=dd.CAMERA),
-        "waypoints": {"count": dd.WAYPOINT_COUNT, "step_m": dd.WAYPOINT_STEP_M},
-        "augmentation": {"random_offset_m": dl.RANDOM_OFFSET_M, "random_yaw_deg": dl.RANDOM_YAW_DEG,
-                         "fixed_offsets_m": list(dl.FIXED_OFFSETS_M), "fixed_yaws_deg": list(dl.FIXED_YAWS_DEG)},
-        "turn": {"lookahead_m": dd.TURN_LOOKAHEAD_M, "threshold_deg": dd.TURN_THRESHOLD_DEG},
-        "guided": {"goal_before_m": before_m, "goal_elsewhere": "random, seeded (crc32 of seed/map/route/u)"},
-    }
-    meta = dd.check_out_dir(out, settings)
-    names = [dd.parse_map(p)["name"] for p, _ in resolved]
-    if meta is None:
-        meta = {"settings": settings, "maps": {}, "order": names}
-    os.makedirs(os.path.join(out, "parts"), exist_ok=True)
-    t0 = time.monotonic()
-    made = 0
-    import shutil
-    for (path, map_set), name in zip(resolved, names):
-        if meta["maps"].get(name, {}).get("complete"):
-            log("%s: complete, skipped" % name)
-            continue
-        shutil.rmtree(os.path.join(out, "images", name), ignore_errors=True)  # interrupted: redo
-        meta["maps"][name] = {"complete": False}
-        dd._write_json(os.path.join(out, "dataset.json"), meta)
-        goals = MapGoals(path, seed, before_m)
-        counts = dd.generate_map(path, map_set, out, settings, log, goal_fn=goals)
-        counts["goals"] = {"junction": goals.counts["junction"], "random": goals.counts["random"],
-                           "left": goals.counts[-1], "straight": goals.counts[0], "right": goals.counts[1]}
-        meta["maps"][name] = counts
-        made += counts["images"]
-        dd._rebuild_labels(out, meta)
-        dd._update_counts(meta)
-        dd._write_json(os.path.join(out, "dataset.json"), meta)
-    dd._rebuild_labels(out, meta)
-    dd._update_counts(meta)
-    dd._write_json(os.path.join(out, "dataset.json"), meta)
-    seconds = time.monotonic() - t0
-    if made:
-        log("made %d images in %.1f s: %.1f images/s" % (made, seconds, made / seconds))
-    log("dataset %s: %d maps, %d samples, %d images" % (out, meta["counts"]["maps"], meta["counts"]["samples"],
-                                                         meta["counts"]["images"]))
-    return meta
+    """driving_dataset.generate on the guided maps with a goal per lane pose
+    (MapGoals); resumes and refuses a DIR of other settings the same way."""
+    from .daemon import REPO_ROOT
+    guided = {"goal_before_m": before_m, "goal_elsewhere": "random, seeded (crc32 of seed/map/route/u)"}
+    return dd.generate(maps, surroundings, out, views, random_views, straight_step, turn_step, max_samples, seed,
+                       log=log, scenes_dir=os.path.join(REPO_ROOT, GUIDED_DIR),
+                       goals=lambda path: MapGoals(path, seed, before_m), extra_settings={"guided": guided})
 
 
 # ---------------------------------------------------------------------------

@@ -15,7 +15,6 @@ labels.csv is rewritten (the old one kept as labels.csv.bak), the parts too.
 """
 
 import csv
-import math
 import os
 import shutil
 from typing import Dict, Optional
