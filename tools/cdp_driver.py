@@ -232,6 +232,35 @@ class Page:
             self.send("Input.dispatchMouseEvent", {"type": kind, "x": x, "y": y, "button": "left",
                                                    "clickCount": 1 if kind != "mouseMoved" else 0})
 
+    # key -> (KeyboardEvent.code, Windows virtual key code) for keys with no text.
+    KEYS = {"ArrowLeft": ("ArrowLeft", 37), "ArrowUp": ("ArrowUp", 38), "ArrowRight": ("ArrowRight", 39),
+            "ArrowDown": ("ArrowDown", 40), "Escape": ("Escape", 27), "Enter": ("Enter", 13), " ": ("Space", 32)}
+
+    def key(self, key, down=True):
+        """A real key press (down=True) or release at the focused element, as
+        DevTools' Input.dispatchKeyEvent sends it: `key` is KeyboardEvent.key
+        ("w", "ArrowLeft", " "); a held key is a keyDown now and a keyUp later."""
+        if key in self.KEYS:
+            code, key_code = self.KEYS[key]
+        else:
+            code, key_code = "Key" + key.upper(), ord(key.upper())
+        params = {"type": "keyDown" if down else "keyUp", "key": key, "code": code,
+                  "windowsVirtualKeyCode": key_code, "nativeVirtualKeyCode": key_code}
+        if down and len(key) == 1:
+            params["text"] = key
+        self.send("Input.dispatchKeyEvent", params)
+
+    def drag(self, x0, y0, x1, y1, steps=8):
+        """A left-button drag from (x0, y0) to (x1, y1), page coordinates: pressed, moved in
+        `steps` steps with the button held, released (pointer events follow, as for a person)."""
+        mouse = {"button": "left", "buttons": 1, "clickCount": 1}
+        self.send("Input.dispatchMouseEvent", {"type": "mouseMoved", "x": x0, "y": y0})
+        self.send("Input.dispatchMouseEvent", dict(mouse, type="mousePressed", x=x0, y=y0))
+        for k in range(1, steps + 1):
+            self.send("Input.dispatchMouseEvent", {"type": "mouseMoved", "button": "left", "buttons": 1,
+                                                   "x": x0 + (x1 - x0) * k / steps, "y": y0 + (y1 - y0) * k / steps})
+        self.send("Input.dispatchMouseEvent", dict(mouse, type="mouseReleased", x=x1, y=y1, buttons=0))
+
     def screenshot(self, path, clip=None):
         """A PNG of the page (or of `clip`: {x, y, width, height}) written to `path`."""
         params = {"format": "png"}

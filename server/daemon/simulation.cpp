@@ -5,7 +5,8 @@
 #include <numbers>
 
 #include "server/common/limits.h"
-#include "server/daemon/map_names.h"
+#include "server/daemon/map_authoring.h"
+#include "server/daemon/map_files.h"
 #include "server/daemon/run_logger.h"
 #include "server/session/effects_wire.h"
 #include "server/sim/map/map_text.h"
@@ -164,6 +165,24 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       break;
     case Kind::kListMaps:
       ListMapNames(config_.maps_dir, *answer.mutable_maps());
+      change.world_changed = false;
+      break;
+    case Kind::kCheckMap:
+      answer.set_map_text(CanonicalMapText(request.check_map().text(), "CheckMap.text"));
+      change.world_changed = false;
+      break;
+    case Kind::kGenerateMap:
+      answer.set_map_text(GeneratedMapText(request.generate_map()));
+      change.world_changed = false;
+      break;
+    case Kind::kOpenMap:
+      answer.set_map_text(ReadMapFile(config_.maps_dir, request.open_map().name()));
+      change.world_changed = false;
+      break;
+    case Kind::kSaveMap:
+      CanonicalMapText(request.save_map().text(), "SaveMap.text (not saved; the file on disk is unchanged)");
+      WriteMapFile(config_.maps_dir, request.save_map().name(), request.save_map().text(),
+                   request.save_map().overwrite());
       change.world_changed = false;
       break;
     case Kind::kSetConditions:

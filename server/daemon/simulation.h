@@ -13,21 +13,12 @@
 #include "protocol/conditions.h"
 #include "protocol/effects.h"
 #include "server/daemon/config.h"
+#include "server/daemon/configure_error.h"
 #include "server/sim/scene.h"
 #include "server/sim/world.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::daemon {
-
-// A Configure that cannot be carried out: the code and message of its Error.
-class ConfigureError : public std::runtime_error {
- public:
-  ConfigureError(proto::ErrorCode code, const std::string& message) : std::runtime_error(message), code_(code) {}
-  proto::ErrorCode code() const { return code_; }
-
- private:
-  proto::ErrorCode code_;
-};
 
 class Simulation {
  public:

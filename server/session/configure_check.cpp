@@ -1,5 +1,6 @@
 #include "server/session/configure_check.h"
 
+#include <cctype>
 #include <cmath>
 #include <sstream>
 #include <type_traits>
@@ -14,6 +15,8 @@ namespace sim4cv::session {
 namespace {
 
 using limits::kMaxNameBytes;
+// A map's path under --maps-dir: room for a few folders of names.
+constexpr std::size_t kMaxMapNameBytes = 4 * kMaxNameBytes;
 
 // A field's name: a string, or a function that builds it, so that a request
 // with 100000 waypoints builds one name only if one of them is bad.
@@ -72,6 +75,32 @@ class Checker {
                  std::to_string(kMaxNameBytes) + " bytes (limits::kMaxNameBytes)";
         });
   }
+  // A path under --maps-dir (OpenMap, SaveMap): '/'-separated parts of
+  // letters, digits, '_', '-', '.', none empty or starting with '.', so no
+  // part is "..", no path is absolute, and no hidden file is named.
+  Checker& MapName(const char* field, const std::string& value) {
+    True(!value.empty(), [&] { return std::string(field) + " is empty; give the map a name"; });
+    bool fine = value.size() <= kMaxMapNameBytes;
+    bool part_start = true;
+    for (char c : value) {
+      const bool word = std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+      fine = fine && (word || (c == '.' && !part_start) || (c == '/' && !part_start));
+      part_start = c == '/';
+    }
+    return True(fine && !part_start, [&] {
+      return std::string(field) + " " + Quoted(value) +
+             " must be a map's path under the maps folder without '.map', e.g. 'studio/my_town': "
+             "parts of letters, digits, '_', '-' and '.' separated by '/', none empty or starting with '.', "
+             "at most " +
+             std::to_string(kMaxMapNameBytes) + " bytes";
+    });
+  }
+  Checker& MapText(const char* field, const std::string& text) {
+    return True(text.size() <= limits::kMaxMapTextBytes, [&] {
+      return std::string(field) + " is " + std::to_string(text.size()) + " bytes; a map text has at most " +
+             std::to_string(limits::kMaxMapTextBytes) + " bytes (limits::kMaxMapTextBytes)";
+    });
+  }
   std::string problem() const { return problem_; }
 
  private:
@@ -90,10 +119,7 @@ std::string CheckLoadMap(const proto::LoadMap& load) {
                  "'tracking/hard_urban' (no '..', no leading '/')";
         });
   }
-  check.True(load.text().size() <= limits::kMaxMapTextBytes, [&] {
-    return "LoadMap.text is " + std::to_string(load.text().size()) + " bytes; a map text has at most " +
-           std::to_string(limits::kMaxMapTextBytes) + " bytes (limits::kMaxMapTextBytes)";
-  });
+  check.MapText("LoadMap.text", load.text());
   check.Name("LoadMap.route", load.route(), true);
   if (load.has_traffic()) {
     check.Range("LoadMap.traffic.cars", load.traffic().cars(), 0, limits::kMaxTrafficCars)
@@ -101,6 +127,27 @@ std::string CheckLoadMap(const proto::LoadMap& load) {
         .Range("LoadMap.traffic.pedestrians", load.traffic().pedestrians(), 0, limits::kMaxTrafficPedestrians);
   }
   return check.Range("LoadMap.car_speed", load.car_speed(), 0, 40).problem();
+}
+
+std::string CheckGenerateMap(const proto::GenerateMap& generate) {
+  const std::string& surroundings = generate.surroundings();
+  Checker check;
+  check
+      .True(generate.width() == 0 || (generate.width() >= 3 && generate.width() <= 24),
+            [&] {
+              return "GenerateMap.width is " + std::to_string(generate.width()) + "; it must be 3..24 tiles (0: 10)";
+            })
+      .True(generate.height() == 0 || (generate.height() >= 3 && generate.height() <= 24), [&] {
+        return "GenerateMap.height is " + std::to_string(generate.height()) + "; it must be 3..24 tiles (0: 10)";
+      });
+  if (generate.tile_size() != 0) check.Range("GenerateMap.tile_size", generate.tile_size(), 12, 50);
+  if (generate.has_roadside_trees()) check.Range("GenerateMap.roadside_trees", generate.roadside_trees(), 0, 1);
+  return check
+      .True(surroundings.empty() || surroundings == "desert" || surroundings == "urban",
+            [&] { return "GenerateMap.surroundings " + Quoted(surroundings) + " must be 'desert' or 'urban'"; })
+      .Name("GenerateMap.name", generate.name(), true)
+      .MapText("GenerateMap.layout_text", generate.layout_text())
+      .problem();
 }
 
 std::string CheckSpawn(const proto::Spawn& spawn) {
@@ -246,6 +293,17 @@ std::string CheckConfigure(const proto::Configure& request) {
       return CheckSetConditions(request.set_conditions());
     case Kind::kSetEffects:
       return CheckSetEffects(request.set_effects());
+    case Kind::kCheckMap:
+      return Checker().MapText("CheckMap.text", request.check_map().text()).problem();
+    case Kind::kGenerateMap:
+      return CheckGenerateMap(request.generate_map());
+    case Kind::kOpenMap:
+      return Checker().MapName("OpenMap.name", request.open_map().name()).problem();
+    case Kind::kSaveMap:
+      return Checker()
+          .MapName("SaveMap.name", request.save_map().name())
+          .MapText("SaveMap.text", request.save_map().text())
+          .problem();
     case Kind::kRemove:
     case Kind::kReset:
     case Kind::kGetWorld:

@@ -89,6 +89,7 @@ export class Controls {
   // The entity clicked on the map (null: none), refreshed with every State.
   select(entity) {
     this.selected = entity;
+    this.app.entityTools?.select(entity);
     $("follow").disabled = $("remove-entity").disabled = !entity;
     if (!entity) {
       $("entity-state").textContent = "click an entity on the map";

@@ -1,6 +1,8 @@
 // The studio page: a control session (world, state, Configure), the live
-// views (a session each), the map and the controls. window.studio is this
-// App, for the browser tests and the console.
+// views (a session each), the map, the controls, spawning and routes
+// (entity_tools.js) and driving a car by hand (driving.js, with its own
+// session). window.studio is this App, for the browser tests and the
+// console; window.studio.driving the Drive panel (its .score the run's score).
 //
 // Page URL options: ?view=CAMERA[:CHANNEL] (repeatable; default: the first
 // camera's RGB), &rgb=raw (lossless RGB in every view), &max_fps=N (each
@@ -11,6 +13,8 @@ import { CHANNELS } from "./colours.js";
 import { LiveView } from "./live_view.js";
 import { WorldMap } from "./world_map.js";
 import { Controls } from "./controls.js";
+import { Driving } from "./driving.js";
+import { EntityTools } from "./entity_tools.js";
 
 const MAX_VIEWS = 4;
 const MAX_ERRORS_SHOWN = 30;
@@ -31,8 +35,13 @@ class App {
   }
 
   async start() {
-    this.map = new WorldMap($("map"), (entity) => this.controls.select(entity));
+    this.map = new WorldMap($("map"), (entity) => {
+      this.controls.select(entity);
+      this.driving.picked(entity);
+    });
     this.controls = new Controls(this);
+    this.entityTools = new EntityTools(this);
+    this.driving = new Driving(this);
     this.control = new StudioSocket("studio");
     this.control.onError = (error) => this.reportError(error, "studio");
     this.control.onClose = (reason) => this.setStatus(`disconnected: ${reason}; reload the page`, true);
@@ -93,6 +102,8 @@ class App {
     this.world = answer.world;
     if (withMap) this.map.setMapText(answer.map_text || "");
     this.controls.setWorld(this.world);
+    this.entityTools.setWorld(this.world);
+    this.driving.setWorld(this.world);
     for (const view of this.views) view.updateCameras();
     const w = this.welcome;
     $("scene").textContent = `${this.world.scene_name} · ${(w.mode || "").replace("SIM_MODE_", "").toLowerCase()} · ` +

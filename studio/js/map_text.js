@@ -54,7 +54,7 @@ function codeAt(map, col, row) {
 // A '#' connects to each neighbour that is road and connects back; a hex
 // digit gives its mask (N = 1, E = 2, S = 4, W = 8) and connects only where
 // the neighbour connects back too.
-function connectionMasks(map) {
+export function connectionMasks(map) {
   const declared = (col, row) => {
     const code = codeAt(map, col, row);
     if (code === ".") return 0;

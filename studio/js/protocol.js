@@ -75,6 +75,13 @@ export class StudioSocket {
     });
   }
 
+  // Driving commands for car `entityId` (steering -1..1, throttle and brake
+  // 0..1). No answer when they are taken; a refusal (another client drives
+  // the car: INVALID_STATE; not a car: UNKNOWN_ENTITY) comes to onError.
+  sendControls(entityId, { steering = 0, throttle = 0, brake = 0 }) {
+    this.send({ controls: { entity_id: entityId, steering, throttle, brake } });
+  }
+
   getState() {
     return new Promise((resolve, reject) => {
       this.stateWaiters.push({ resolve, reject });
