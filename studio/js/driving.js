@@ -218,7 +218,7 @@ export class Driving {
       const answer = await this.app.controls.run("AddCamera", { add_camera: { name, mounted_on: car.name, ...request } });
       if (!answer) return null;
     }
-    if (!this.app.views.some((v) => v.camera === name)) this.app.addView(name);
+    if (!this.app.views.some((v) => v.camera === name)) this.app.addView(name, "CHANNEL_RGB", { boxes: false });
     return name;
   }
 

@@ -8,13 +8,14 @@ import { StudioSocket } from "./protocol.js";
 import { CHANNELS, CLASS_COLOURS, className, toRgba } from "./colours.js";
 
 export class LiveView {
-  // app: {cameras(), clockOffsetMs, reportError(error)}; index: for ids.
-  constructor(app, parent, index, camera, channel = "CHANNEL_RGB") {
+  // app: {cameras(), clockOffsetMs, reportError(error)}; index: for ids;
+  // options: {boxes: false} starts without the boxes (a view to drive by).
+  constructor(app, parent, index, camera, channel = "CHANNEL_RGB", options = {}) {
     this.app = app;
     this.index = index;
     this.camera = camera;
     this.channel = channel;
-    this.boxes = true;
+    this.boxes = options.boxes ?? true;
     this.rgb = "jpeg";
     this.maxFps = app.maxFps ?? 30;
     this.frames = 0;
@@ -56,6 +57,7 @@ export class LiveView {
     const channel = panel.querySelector("select.channel");
     channel.value = this.channel;
     channel.onchange = () => { this.channel = channel.value; this.subscribe(); };
+    panel.querySelector("input.boxes").checked = this.boxes;
     panel.querySelector("input.boxes").onchange = (e) => { this.boxes = e.target.checked; this.subscribe(); };
     const rgb = panel.querySelector("select.rgb");
     rgb.onchange = () => { this.rgb = rgb.value; this.reconnect(); };

@@ -72,12 +72,12 @@ class App {
     return (this.world?.cameras || []).map((c) => c.name).filter(Boolean);
   }
 
-  addView(camera, channel = "CHANNEL_RGB") {
+  addView(camera, channel = "CHANNEL_RGB", options = {}) {
     if (this.views.length >= MAX_VIEWS) {
       this.reportError(new Error(`at most ${MAX_VIEWS} views; close one first`), "view");
       return null;
     }
-    const view = new LiveView(this, $("views"), this.nextViewIndex++, camera, channel);
+    const view = new LiveView(this, $("views"), this.nextViewIndex++, camera, channel, options);
     if (this.params.get("rgb") === "raw") {
       view.rgb = "raw";
       view.panel.querySelector("select.rgb").value = "raw";

@@ -128,6 +128,25 @@ def test_map_text_and_the_shipped_maps(connect):
     assert client.get_map_text() == text
 
 
+def test_map_files_generate_and_check(start_daemon, connect, tmp_path):
+    """The editor's requests from Python: generate, check, save, open, list,
+    load by the saved name; a broken map is not saved."""
+    own = start_daemon("--maps-dir", str(tmp_path))
+    client = connect("editor", target=own)
+    text = client.generate_map(seed=7, width=8, height=6, surroundings="urban", name="mine")
+    assert text.startswith("sim4cv-map 1\n# sim4cv_mapgen ") and "name mine\n" in text
+    assert "grid 8 6\n" in client.check_map(text)
+    client.save_map("studio/mine", text)
+    assert (tmp_path / "studio" / "mine.map").read_text() == text
+    assert client.open_map("studio/mine") == text and client.list_maps() == ["studio/mine"]
+    assert client.load_map_by_name("studio/mine").scene_name == "mine"
+    refused(lambda: client.save_map("studio/mine", text), pb.ERROR_CODE_ALREADY_EXISTS, "overwrite")
+    refused(lambda: client.save_map("studio/mine", text + "bogus 1\n", overwrite=True), pb.ERROR_CODE_INVALID_ARGUMENT,
+            "not saved", "'bogus 1'")
+    assert (tmp_path / "studio" / "mine.map").read_text() == text
+    refused(lambda: client.open_map("../outside"), pb.ERROR_CODE_INVALID_ARGUMENT, "OpenMap.name '../outside'")
+
+
 def test_configure_errors_name_the_problem(connect):
     client = connect("configure")
     refused(lambda: client.load_map_text("sim4cv-map 1\nname broken\ncolour red\n"),

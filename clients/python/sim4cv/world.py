@@ -158,6 +158,32 @@ class WorldRequests:
         --maps-dir, e.g. "tracking/easy_urban", sorted."""
         return list(self.configure(pb.Configure(list_maps=pb.ListMaps())).maps)
 
+    def check_map(self, text):
+        """The daemon's parser on map text, nothing loaded: the canonical
+        text, or a ServerError naming the line ("map line N 'LINE': ...")."""
+        return self.configure(pb.Configure(check_map=pb.CheckMap(text=text))).map_text
+
+    def generate_map(self, seed=1, width=10, height=10, surroundings="desert", name="", tile_size=0.0,
+                     roadside_trees=None, layout_text=""):
+        """The seeded generator's map text (sim4cv_mapgen's, byte for byte);
+        with layout_text, that map's roads and routes newly dressed. Nothing
+        is loaded: load_map_text plays it."""
+        request = pb.GenerateMap(seed=seed, width=width, height=height, surroundings=surroundings, name=name,
+                                 tile_size=tile_size, layout_text=layout_text)
+        if roadside_trees is not None:
+            request.roadside_trees = roadside_trees
+        return self.configure(pb.Configure(generate_map=request)).map_text
+
+    def open_map(self, name):
+        """The bytes of a map file under the daemon's --maps-dir (a name
+        list_maps gives)."""
+        return self.configure(pb.Configure(open_map=pb.OpenMap(name=name))).map_text
+
+    def save_map(self, name, text, overwrite=False):
+        """Writes text to NAME.map under the daemon's --maps-dir, if the
+        daemon's parser accepts it; an existing file only with overwrite."""
+        self.configure(pb.Configure(save_map=pb.SaveMap(name=name, text=text, overwrite=overwrite)))
+
     def query_road(self, x, y, count=0, step=0.0, heading_deg=None):
         """Map scenes only: the nearest lane point to (x, y) (only lanes
         within 90 degrees of heading_deg, if given) and `count` points every

@@ -79,7 +79,7 @@ export class Preview {
       reportError: (error, where) => this.app.reportError(error, where),
       removeView: () => this.stopView(),
     };
-    this.view = new LiveView(owner, $("preview-box"), 0, PREVIEW_CAMERA, "CHANNEL_RGB");
+    this.view = new LiveView(owner, $("preview-box"), 0, PREVIEW_CAMERA, "CHANNEL_RGB", { boxes: false });
     this.dragToOrbit(this.view.overlay);
     this.view.connect();
   }
