@@ -7,6 +7,7 @@ With STUDIO_SKIP_EXIT set (the studio_browser CTest entry sets 77), a run
 whose tests were all skipped because Chromium is missing exits with that
 status, so CTest reports the test as skipped instead of passed."""
 
+import contextlib
 import os
 import sys
 
@@ -20,6 +21,20 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from sim4cv.daemon import OwnDaemon  # noqa: E402
 
 MAP = os.path.join(REPO_ROOT, "scenes", "tracking", "easy_urban.map")
+TIMEOUT_S = 20.0
+
+
+@contextlib.contextmanager
+def clean_page(browser, url, ready):
+    """A tab on `url`, once the JavaScript expression `ready` holds. On leaving
+    it must have logged no exception, no console error and no warning (the
+    MujocoTest rule: a warning is a failure)."""
+    page = browser.new_page(url)
+    page.wait_for(ready, TIMEOUT_S)
+    yield page
+    page.collect()
+    assert page.problems == [], page.problems
+    assert [text for kind, text in page.console if kind in ("warning", "error")] == []
 
 
 def start_daemon(*args, mode="lockstep"):

@@ -15,13 +15,12 @@ import pytest
 import sim4cv
 from sim4cv import visualize
 from cdp_driver import Browser, chromium_path
-from conftest import MAP, start_daemon
+from conftest import MAP, TIMEOUT_S, clean_page, start_daemon
 
 pytestmark = pytest.mark.skipif(
     chromium_path() is None,
     reason="Chromium is not installed: the studio's browser tests need Debian's chromium (scripts/setup.sh)")
 
-TIMEOUT_S = 20.0
 
 # The RGB of a view's image canvas, base64 (getImageData: exactly what was drawn).
 CANVAS_RGB = """(() => {
@@ -52,13 +51,10 @@ def stepper(daemon):
 
 @pytest.fixture(scope="module")
 def page(daemon, stepper):
-    with Browser() as browser:
-        page = browser.new_page("http://127.0.0.1:%d/?view=uav:rgb&rgb=raw&max_fps=0" % daemon.http)
-        page.wait_for("window.studio && studio.ready && studio.views.length === 1", TIMEOUT_S)
+    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?view=uav:rgb&rgb=raw&max_fps=0" % daemon.http,
+                                          "window.studio && studio.ready && studio.views.length === 1") as page:
         page.wait_for("document.querySelector('#view-0 .view-stats').textContent.startsWith('subscribed')", TIMEOUT_S)
         yield page
-        page.collect()
-        assert page.problems == [], page.problems
 
 
 def canvas_rgb(page, view=0):

@@ -15,14 +15,13 @@ import pytest
 import sim4cv
 from sim4cv import driving_metrics
 from cdp_driver import Browser, chromium_path
-from conftest import REPO_ROOT, start_daemon
+from conftest import REPO_ROOT, TIMEOUT_S, clean_page, start_daemon
 
 pytestmark = pytest.mark.skipif(
     chromium_path() is None,
     reason="Chromium is not installed: the studio's browser tests need Debian's chromium (scripts/setup.sh)")
 
 MAP = os.path.join(REPO_ROOT, "scenes", "driving", "test", "01_urban.map")
-TIMEOUT_S = 20.0
 # driving/test/01_urban (12 x 12 tiles of 20 m): the road along the map's east edge runs north-south
 # at x = 110 (its northbound lane's centre at x = 112); the route "loop" goes north at x = -50 (lane at -48).
 EAST_ROAD = (112.5, -40.0)
@@ -48,12 +47,9 @@ def client(daemon):
 
 @pytest.fixture(scope="module")
 def page(daemon, client):
-    with Browser() as browser:
-        page = browser.new_page("http://127.0.0.1:%d/?max_fps=10" % daemon.http)
-        page.wait_for("window.studio && studio.ready && studio.state && studio.map.fitted", TIMEOUT_S)
+    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?max_fps=10" % daemon.http,
+                                          "window.studio && studio.ready && studio.state && studio.map.fitted") as page:
         yield page
-        page.collect()
-        assert page.problems == [], page.problems
 
 
 def press(page, selector):

@@ -17,13 +17,12 @@ import pytest
 import sim4cv
 from sim4cv import sim4cv_pb2 as pb
 from cdp_driver import Browser, chromium_path
-from conftest import REPO_ROOT, start_daemon
+from conftest import REPO_ROOT, TIMEOUT_S, clean_page, start_daemon
 
 pytestmark = pytest.mark.skipif(
     chromium_path() is None,
     reason="Chromium is not installed: the studio's browser tests need Debian's chromium (scripts/setup.sh)")
 
-TIMEOUT_S = 20.0
 SCENES = os.path.join(REPO_ROOT, "scenes")
 SHIPPED = sorted(os.path.relpath(path, SCENES)[:-len(".map")]
                  for path in glob.glob(os.path.join(SCENES, "**", "*.map"), recursive=True))
@@ -61,13 +60,9 @@ def browser():
 
 @pytest.fixture(scope="module")
 def page(daemon, browser):
-    page = browser.new_page("http://127.0.0.1:%d/editor.html" % daemon.http)
-    page.wait_for("window.editor && editor.ready", TIMEOUT_S)
-    page.evaluate("window.confirmed = []; window.confirm = (m) => { confirmed.push(m); return true; }")
-    yield page
-    page.collect()
-    assert page.problems == [], page.problems
-    assert [text for kind, text in page.console if kind in ("warning", "error")] == []
+    with clean_page(browser, "http://127.0.0.1:%d/editor.html" % daemon.http, "window.editor && editor.ready") as page:
+        page.evaluate("window.confirmed = []; window.confirm = (m) => { confirmed.push(m); return true; }")
+        yield page
 
 
 def js(value):

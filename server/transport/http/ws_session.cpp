@@ -12,13 +12,11 @@ namespace websocket = beast::websocket;
 using Outcome = session::ClientProtocol::Outcome;
 
 WsSession::WsSession(beast::tcp_stream stream, uint64_t key, HttpHub& hub, WsViewOptions view)
-    : ws_(std::move(stream)),
+    : StreamSession(stream.get_executor(), session::NewClientId(), hub.options.timeouts, "WebSocket"),
+      ws_(std::move(stream)),
       key_(key),
       hub_(hub),
-      view_(view),
-      client_(session::NewClientId()),
-      deadlines_(hub.options.timeouts, Clock::now()),
-      timer_(ws_.get_executor()) {
+      view_(view) {
   beast::get_lowest_layer(ws_).expires_never();  // the WebSocket's own timeouts rule from here
   websocket::stream_base::timeout timeouts{};
   const uint32_t handshake_ms = hub.options.timeouts.handshake_ms;
@@ -54,9 +52,7 @@ void WsSession::Accept(Request request, std::function<void()> then) {
 
 void WsSession::Start(Request request) {
   Accept(std::move(request), [this] {
-    session_ = session::ClientSession::Create(client_, *hub_.context, [weak = weak_from_this()] {
-      if (auto self = weak.lock()) self->WakeWriter();
-    });
+    CreateSession(*hub_.context);
     LOG_INFO("client " << client_ << " connected over WebSocket");
     ArmTimer();
     ContinueReading();
@@ -68,12 +64,6 @@ void WsSession::Reject(Request request, proto::ErrorCode code, const std::string
     session::ClientProtocol::Refuse(code, message, true, reply_);
     Reply(Outcome::kReplyAndClose);
   });
-}
-
-void WsSession::ContinueReading() {
-  if (reading_ || close_after_writes_ || closed_ || !accepted_) return;
-  read_paused_ = Backlog() > limits::kReplyBacklogBytes;
-  if (!read_paused_) ReadSome();
 }
 
 void WsSession::ReadSome() {
@@ -164,8 +154,6 @@ void WsSession::Reply(Outcome outcome) {
 // After a fatal Error: read no more, send nothing after it, then the close
 // handshake with the status that fits, or a hard close after kCloseLingerMs.
 void WsSession::CloseAfterWrites(const proto::Envelope& error) {
-  LOG_INFO("client " << client_ << " refused: " << error.error().message());
-  close_after_writes_ = true;
   switch (error.error().code()) {
     case proto::ERROR_CODE_TOO_MANY_CLIENTS:
       close_code_ = websocket::close_code::try_again_later;
@@ -176,64 +164,13 @@ void WsSession::CloseAfterWrites(const proto::Envelope& error) {
     default:
       close_code_ = websocket::close_code::policy_error;
   }
-  if (session_) session_->StopOffers();
-  close_deadline_ = Clock::now() + std::chrono::milliseconds(limits::kCloseLingerMs);
-  ArmTimer();
+  StopAfter(error);
 }
 
 void WsSession::QueueEnvelope(const proto::Envelope& envelope) {
   EnvelopeToJson(envelope, json_);
   queued_bytes_ += json_.size();
   replies_.push_back(json_);
-}
-
-void WsSession::ArmTimer() {
-  if (closed_) return;
-  const Clock::time_point deadline = close_after_writes_ ? close_deadline_ : deadlines_.next();
-  if (deadline >= timer_at_) return;
-  timer_at_ = deadline;
-  timer_.expires_at(deadline);
-  timer_.async_wait([self = shared_from_this()](boost::system::error_code error) {
-    if (error != asio::error::operation_aborted) self->OnTimer();
-  });
-}
-
-void WsSession::OnTimer() {
-  timer_at_ = Clock::time_point::max();
-  if (closed_) return;
-  const auto now = Clock::now();
-  if (close_after_writes_) {
-    if (now < close_deadline_) return ArmTimer();
-    LOG_INFO("client " << client_ << " did not take its fatal Error within " << limits::kCloseLingerMs
-                       << " ms; closing its WebSocket");
-    return Close();
-  }
-  if (const auto expired = deadlines_.Check(now)) {
-    return Reply(session::ClientProtocol::Refuse(expired->code, expired->message, true, reply_));
-  }
-  ArmTimer();
-}
-
-// Sim thread. One pending wake-up is enough however many offers arrive before it runs.
-void WsSession::WakeWriter() {
-  if (!pump_posted_.exchange(true)) {
-    asio::post(ws_.get_executor(), [self = shared_from_this()] {
-      self->pump_posted_ = false;
-      self->PumpWrites();
-    });
-  }
-}
-
-void WsSession::TakeOfferedReplies() {
-  if (!session_) return;
-  session_->TakeReplies(offered_);
-  for (const proto::Envelope& reply : offered_) {
-    if (close_after_writes_) break;
-    QueueEnvelope(reply);
-    if (session::ClientProtocol::EndsConnection(reply)) CloseAfterWrites(reply);
-  }
-  offered_.clear();
-  if (offered_.capacity() > 64) std::vector<proto::Envelope>().swap(offered_);
 }
 
 void WsSession::PumpWrites() {

@@ -32,11 +32,12 @@
 #include "server/session/client_session.h"
 #include "server/transport/http/http_hub.h"
 #include "server/transport/http/ws_frame_writer.h"
+#include "server/transport/stream_session.h"
 #include "server/transport/tcp/connection_deadlines.h"
 
 namespace sim4cv::transport {
 
-class WsSession : public HttpPeer, public std::enable_shared_from_this<WsSession> {
+class WsSession : public HttpPeer, public StreamSession<WsSession>, public std::enable_shared_from_this<WsSession> {
  public:
   // `key`: the connection's entry in the hub, forgotten when it closes.
   WsSession(boost::beast::tcp_stream stream, uint64_t key, HttpHub& hub, WsViewOptions view);
@@ -50,22 +51,17 @@ class WsSession : public HttpPeer, public std::enable_shared_from_this<WsSession
   void Close() override;
 
  private:
-  using Clock = std::chrono::steady_clock;
+  friend class StreamSession<WsSession>;
   using Request = boost::beast::http::request<boost::beast::http::empty_body>;
 
   void Accept(Request request, std::function<void()> then);
-  void ContinueReading();
+  bool CanRead() const { return accepted_; }
   void ReadSome();
   void OnRead(const boost::system::error_code& error);
   void HandleMessage();
   void Reply(session::ClientProtocol::Outcome outcome);
   void CloseAfterWrites(const proto::Envelope& error);
   void QueueEnvelope(const proto::Envelope& envelope);
-  std::size_t Backlog() const { return queued_bytes_ + (session_ ? session_->reply_bytes() : 0); }
-  void ArmTimer();
-  void OnTimer();
-  void WakeWriter();
-  void TakeOfferedReplies();
   void PumpWrites();
   void WriteReply();
   void WriteFrame(session::FrameRef frame);
@@ -76,38 +72,17 @@ class WsSession : public HttpPeer, public std::enable_shared_from_this<WsSession
   uint64_t key_;
   HttpHub& hub_;
   WsViewOptions view_;
-  session::ClientId client_;
-  std::shared_ptr<session::ClientSession> session_;  // null for a client refused before its Hello
 
   // Reading: a message in pieces of limits::kReadChunkBytes into one buffer.
   Request upgrade_request_;
   boost::beast::flat_buffer read_buffer_;
-  proto::Envelope request_;
-  proto::Envelope reply_;
   bool accepted_ = false;
-  bool reading_ = false;
   bool message_started_ = false;  // a message's first piece arrived, not its last
-  bool read_paused_ = false;      // back-pressure: the backlog is over its bound
 
-  ConnectionDeadlines deadlines_;
-  boost::asio::steady_timer timer_;
-  Clock::time_point timer_at_ = Clock::time_point::max();
-  Clock::time_point close_deadline_ = Clock::time_point::max();
-
-  // Writing: replies go before frames; one message in flight at a time.
-  std::deque<std::string> replies_;
-  std::string reply_in_flight_;
-  std::size_t queued_bytes_ = 0;
-  std::vector<proto::Envelope> offered_;
   std::string json_;  // reused
-  session::FrameRef frame_in_flight_;
   WsFrameWriter frame_writer_;
   boost::beast::websocket::close_code close_code_ = boost::beast::websocket::close_code::normal;
-  bool writing_ = false;
-  bool close_after_writes_ = false;
   bool closing_ = false;  // the close handshake is under way
-  bool closed_ = false;
-  std::atomic<bool> pump_posted_{false};
 };
 
 }  // namespace sim4cv::transport

@@ -1,8 +1,8 @@
 #include "server/transport/tcp/tcp_session.h"
 
 #include "protocol/framing.h"
-#include "server/common/limits.h"
 #include "server/common/diagnostics.h"
+#include "server/common/limits.h"
 
 namespace sim4cv::transport {
 
@@ -11,13 +11,11 @@ using Outcome = session::ClientProtocol::Outcome;
 
 TcpSession::TcpSession(asio::ip::tcp::socket socket, session::ClientId client, const session::ServerContext& context,
                        const TcpOptions& options, OnClosed on_closed)
-    : socket_(std::move(socket)),
-      client_(client),
+    : StreamSession(socket.get_executor(), client, options.timeouts, "connection"),
+      socket_(std::move(socket)),
       context_(context),
       on_closed_(std::move(on_closed)),
-      reader_(context.max_message_bytes),
-      deadlines_(options.timeouts, Clock::now()),
-      timer_(socket_.get_executor()) {
+      reader_(context.max_message_bytes) {
   frame_buffers_.reserve(2 * channels::kPixelChannelCount + 1);  // FrameEncoder's most segments
   boost::system::error_code ignored;
   socket_.set_option(asio::ip::tcp::no_delay(true), ignored);  // frames must leave at once
@@ -27,9 +25,7 @@ TcpSession::TcpSession(asio::ip::tcp::socket socket, session::ClientId client, c
 }
 
 void TcpSession::Start() {
-  session_ = session::ClientSession::Create(client_, context_, [weak = weak_from_this()] {
-    if (auto self = weak.lock()) self->WakeWriter();
-  });
+  CreateSession(context_);
   ArmTimer();
   ContinueReading();
 }
@@ -39,20 +35,11 @@ void TcpSession::Reject(proto::ErrorCode code, const std::string& message) {
   Reply(Outcome::kReplyAndClose);
 }
 
-// Between messages: read the next one, unless the client's replies pile up
-// (back-pressure: it reads them first) or the connection is ending.
-void TcpSession::ContinueReading() {
-  if (reading_ || close_after_writes_ || closed_) return;
-  read_paused_ = Backlog() > limits::kReplyBacklogBytes;
-  if (!read_paused_) ReadSome();
-}
-
 void TcpSession::ReadSome() {
   reading_ = true;
-  socket_.async_read_some(asio::buffer(reader_.next_data(), reader_.next_size()),
-                          [self = shared_from_this()](boost::system::error_code error, std::size_t count) {
-                            self->OnRead(error, count);
-                          });
+  socket_.async_read_some(
+      asio::buffer(reader_.next_data(), reader_.next_size()),
+      [self = shared_from_this()](boost::system::error_code error, std::size_t count) { self->OnRead(error, count); });
 }
 
 void TcpSession::OnRead(const boost::system::error_code& error, std::size_t count) {
@@ -118,17 +105,6 @@ void TcpSession::Reply(Outcome outcome) {
   ContinueReading();
 }
 
-// After a fatal Error, from ClientProtocol, the sim thread or a timeout: stop
-// reading, send nothing more, close once the Error is out, or after
-// kCloseLingerMs if the client does not read it.
-void TcpSession::CloseAfterWrites(const proto::Envelope& error) {
-  LOG_INFO("client " << client_ << " refused: " << error.error().message());
-  close_after_writes_ = true;
-  if (session_) session_->StopOffers();
-  close_deadline_ = Clock::now() + std::chrono::milliseconds(limits::kCloseLingerMs);
-  ArmTimer();
-}
-
 std::size_t TcpSession::QueueEnvelope(const proto::Envelope& envelope) {
   std::string bytes(wire::kLengthPrefixBytes, '\0');
   envelope.AppendToString(&bytes);
@@ -138,58 +114,6 @@ std::size_t TcpSession::QueueEnvelope(const proto::Envelope& envelope) {
   queued_bytes_ += size;
   replies_.push_back(std::move(bytes));
   return size;
-}
-
-// Sets the timer for the earliest deadline unless it already fires sooner; a
-// deadline that moved later is found when the timer fires (OnTimer).
-void TcpSession::ArmTimer() {
-  if (closed_) return;
-  const Clock::time_point deadline = close_after_writes_ ? close_deadline_ : deadlines_.next();
-  if (deadline >= timer_at_) return;
-  timer_at_ = deadline;
-  timer_.expires_at(deadline);  // cancels the earlier wait, if any
-  timer_.async_wait([self = shared_from_this()](boost::system::error_code error) {
-    if (error != asio::error::operation_aborted) self->OnTimer();
-  });
-}
-
-void TcpSession::OnTimer() {
-  timer_at_ = Clock::time_point::max();
-  if (closed_) return;
-  const auto now = Clock::now();
-  if (close_after_writes_) {
-    if (now < close_deadline_) return ArmTimer();
-    LOG_INFO("client " << client_ << " did not read its fatal Error within " << limits::kCloseLingerMs
-                       << " ms; closing its connection");
-    return Close();
-  }
-  if (const auto expired = deadlines_.Check(now)) {
-    return Reply(session::ClientProtocol::Refuse(expired->code, expired->message, true, reply_));
-  }
-  ArmTimer();
-}
-
-// Sim thread. One pending wake-up is enough however many offers arrive before it runs.
-void TcpSession::WakeWriter() {
-  if (!pump_posted_.exchange(true)) {
-    asio::post(socket_.get_executor(), [self = shared_from_this()] {
-      self->pump_posted_ = false;
-      self->PumpWrites();
-    });
-  }
-}
-
-// Queues the sim thread's replies behind ClientProtocol's; nothing after a fatal Error.
-void TcpSession::TakeOfferedReplies() {
-  if (!session_) return;
-  session_->TakeReplies(offered_);
-  for (const proto::Envelope& reply : offered_) {
-    if (close_after_writes_) break;
-    QueueEnvelope(reply);
-    if (session::ClientProtocol::EndsConnection(reply)) CloseAfterWrites(reply);
-  }
-  offered_.clear();
-  if (offered_.capacity() > 64) std::vector<proto::Envelope>().swap(offered_);  // a burst's slots go back
 }
 
 void TcpSession::PumpWrites() {
