@@ -103,6 +103,34 @@ def test_reference_policy_drives_a_test_map_within_the_lane(tmp_path):
     assert report["histogram"]["overall"][4] > 0.99  # within 25 cm
 
 
+def test_a_left_lane_lap_is_scored_against_the_left_lane(tmp_path):
+    # The reference policy aims at the ideal path's points: with lane "left"
+    # the lap starts on the left lane and that lane's centre is the path.
+    policy = de.ReferencePolicy()
+    policy.lane = "left"
+    report = de.evaluate(policy, [TEST_MAP], ["desert"], str(tmp_path), log=lambda *a: None)
+    o = report["overall"]
+    assert o["completed"] == 1 and o["mean_deviation_cm"] < 5.0 and o["lane_departures"] == 0
+    csv_path = tmp_path / "runs" / "driving_test_01_desert_loop.csv"
+    info = dd.parse_map(TEST_MAP)
+    lane = dd.RoutePath(info, "loop")
+    rows = [line.split(",") for line in csv_path.read_text().splitlines()[1:]]
+    x, y = float(rows[len(rows) // 2][1]), float(rows[len(rows) // 2][2])
+    distances = [dm.signed_distance_to_segment(x, y, segment)[1] for segment in lane.segments]
+    assert min(distances, key=abs) == pytest.approx(-4.0, abs=0.3)  # 4 m left of the right lane
+
+
+def test_the_mirror_trick_mirrors_image_goal_and_h():
+    pytest.importorskip("torch")
+    import numpy as np
+    image = np.random.default_rng(2).integers(0, 256, (180, 320, 3), dtype=np.uint8)
+    left = de.NetworkPolicy(os.path.join(SHIPPED, "model.pt"), goal=1.0, lane="left")
+    right = de.NetworkPolicy(os.path.join(SHIPPED, "model.pt"), goal=-1.0)
+    mirrored = right.waypoints(np.ascontiguousarray(image[:, ::-1]), None, None)
+    assert left.waypoints(image, None, None) == pytest.approx([-v if i % 2 else v for i, v in enumerate(mirrored)],
+                                                              abs=1e-4)
+
+
 def test_missing_and_malformed_models_are_refused(tmp_path):
     with pytest.raises(de.EvalError, match="model file .*nothing.onnx does not exist"):
         de.NetworkPolicy(str(tmp_path / "nothing.onnx"))

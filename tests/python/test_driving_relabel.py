@@ -34,4 +34,6 @@ def test_goals_follow_the_route_at_junctions_and_are_random_elsewhere(tmp_path):
     elsewhere = {r["goal"] for r in rows if r not in at_junction}
     assert elsewhere == {"-1", "0", "1"}  # random where there is no choice
     assert counts["junction"] >= len(at_junction)
+    assert all(r["junction"] == "1" for r in at_junction)  # train --junction-weight reads this
+    assert sum(r["junction"] == "1" for r in rows) == counts["junction"]
     assert nav.goal(start + 1.0) == -1.0 and nav.goal(start - 5.0) == 0.0

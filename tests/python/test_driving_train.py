@@ -61,6 +61,34 @@ def test_train_two_epochs_and_export(dataset, tmp_path):
         dt.train(str(dataset), str(dataset), str(out), epochs=2, batch=8, lr=1e-3, log=lambda *a: None)
 
 
+def test_junction_weight_draws_junction_samples_more_often(dataset, tmp_path):
+    with pytest.raises(dt.TrainError, match="junction column of `relabel`"):
+        dt.train(str(dataset), str(dataset), str(tmp_path / "m"), epochs=1, junction_weight=5.0, log=lambda *a: None)
+    relabelled = tmp_path / "relabelled"
+    relabelled.mkdir()
+    with open(dataset / "labels.csv") as f:
+        lines = f.read().splitlines()
+    # the first sample's views marked as at a junction
+    rows = [line + ("," + ("1" if line.split(",")[4] == "0" else "0") if i else ",junction")
+            for i, line in enumerate(lines)]
+    (relabelled / "labels.csv").write_text("\n".join(rows) + "\n")
+    os.symlink(dataset / "images", relabelled / "images")
+    parts = [dt.DrivingDataset(str(relabelled))]
+    junction = parts[0].junction
+    assert 0 < junction.sum() < len(junction)
+    draws = dt._order(parts, [str(relabelled)], 50.0, torch.Generator().manual_seed(0))["sampler"]
+    drawn = np.array(list(draws))
+    assert len(drawn) == len(junction)
+    share = junction[drawn].mean()
+    want = 50.0 * junction.sum() / (50.0 * junction.sum() + (~junction).sum())
+    assert abs(share - want) < 0.35, (share, want)
+    meta = dt.train(str(relabelled), str(relabelled), str(tmp_path / "w"), epochs=1, batch=8, junction_weight=50.0,
+                    log=lambda *a: None)
+    assert meta["settings"]["junction_weight"] == 50.0
+    with pytest.raises(dt.TrainError, match="must be >= 1"):
+        dt.train(str(relabelled), str(relabelled), str(tmp_path / "x"), junction_weight=0.5, log=lambda *a: None)
+
+
 def test_refusals(dataset, tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()

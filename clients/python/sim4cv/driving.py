@@ -31,7 +31,8 @@ def evaluate_main(argv: List[str]) -> int:
                    help="weather/time-of-day preset (default clear_noon); several, comma-separated: one evaluation "
                         "each into OUT/PRESET/ and a comparison in OUT/conditions.md")
     p.add_argument("--lane", choices=("right", "left"), default="right",
-                   help="left: mirror image and h (the lane-change trick); scored against the right lane")
+                   help="left: mirror image, goal and h (the lane-change trick); a lap starts on the left lane and is "
+                        "scored against its centre")
     p.add_argument("--frame-hz", type=float, default=30.0)
     p.add_argument("--obstacles", type=int, default=0,
                    help="cars parked in the lane per route, placed as the dataset places them (with --seed)")
@@ -45,6 +46,8 @@ def evaluate_main(argv: List[str]) -> int:
         else:
             if not a.model:
                 p.error("--policy network needs --model FILE")
+            if a.lane == "left" and a.obstacles:
+                p.error("--lane left drives the left lane, where --obstacles are passed: use one of them")
             policy = de.NetworkPolicy(a.model, lane=a.lane)
             policy.path = a.model
         surroundings = [s for s in a.surroundings.split(",") if s]

@@ -95,9 +95,10 @@ class NetworkPolicy:
         image = rgb
         if image.shape[0] != self.height or image.shape[1] != self.width:
             image = self.cv2.resize(image, (self.width, self.height), interpolation=self.cv2.INTER_AREA)
-        if self.lane == "left":
-            image = image[:, ::-1]
-        out = [float(v) for v in self.run(np.ascontiguousarray(image), self.goal)]
+        goal = self.goal
+        if self.lane == "left":  # a left turn in the mirrored image is a right one
+            image, goal = image[:, ::-1], -goal
+        out = [float(v) for v in self.run(np.ascontiguousarray(image), goal)]
         if self.lane == "left":
             out = [-v if i % 2 else v for i, v in enumerate(out)]
         return out
@@ -144,7 +145,9 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     """Drives one lap of `route` under `policy` (with `obstacles` parked cars
     to pass, placed as the dataset places them); returns (run dict, rows, deviations)."""
     lane = RoutePath(info, route)
-    path = dob.ShiftedPath(lane, dob.place(lane, obstacles, seed, info["name"]))
+    # A policy driving the left lane (the mirror trick) is scored against the left lane's centre.
+    offset = dob.LANE_SHIFT_M if getattr(policy, "lane", "right") == "left" else 0.0
+    path = dob.ShiftedPath(lane, dob.place(lane, obstacles, seed, info["name"]), offset)
     parked = []
     for k, (ox, oy, oyaw) in enumerate(path.obstacle_poses()):
         client.spawn("car", dob.OBSTACLE_NAME % k, ox, oy, 0.0, math.degrees(oyaw))

@@ -86,11 +86,14 @@ def shift(u: float, obstacles: Sequence[float], path) -> Tuple[float, float]:
 class ShiftedPath:
     """A RoutePath whose points move left around obstacles: point(u) like
     RoutePath.point, on the ideal path (exact on the straights the shifts
-    are confined to). `lane` is the underlying RoutePath."""
+    are confined to). `lane` is the underlying RoutePath. `offset`: metres
+    left of the right lane everywhere (LANE_SHIFT_M: the left lane's centre,
+    exact on lines and arcs alike, since the lanes are concentric)."""
 
-    def __init__(self, lane, obstacles: Sequence[float]):
+    def __init__(self, lane, obstacles: Sequence[float], offset: float = 0.0):
         self.lane = lane
         self.obstacles = list(obstacles)
+        self.offset = offset
         self.closed = lane.closed
         self.length = lane.length
         self.segments = lane.segments
@@ -98,12 +101,13 @@ class ShiftedPath:
     def point(self, u: float) -> Tuple[float, float, float]:
         x, y, heading = self.lane.point(u)
         s, slope = shift(u, self.obstacles, self.lane)
+        s += self.offset
         return (x - s * math.sin(heading), y + s * math.cos(heading), heading + math.atan(slope))
 
     def deviation(self, u: float, lane_deviation: float) -> float:
         """Signed distance (+ right) from the ideal path, given the signed
         distance from the right-lane centre at arc length u."""
-        return lane_deviation + shift(u, self.obstacles, self.lane)[0]
+        return lane_deviation + shift(u, self.obstacles, self.lane)[0] + self.offset
 
     def obstacle_poses(self) -> List[Tuple[float, float, float]]:
         """(x, y, heading rad) of each obstacle: in the right lane, along it."""

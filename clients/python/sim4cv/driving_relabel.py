@@ -11,7 +11,9 @@ junction of its route, or in it, gets the direction the route takes there
 (sim4cv.driving_guided.MapGoals); elsewhere a seeded random goal, so the
 network learns to ignore the goal where there is no choice. Every view of
 a lane pose (the original and its augmented views) gets the pose's goal.
-labels.csv is rewritten (the old one kept as labels.csv.bak), the parts too.
+labels.csv is rewritten (the old one kept as labels.csv.bak), the parts too,
+with a `junction` column (1: the pose is at a junction of its route, where
+the goal decides the way), which `train --junction-weight K` oversamples.
 """
 
 import csv
@@ -51,13 +53,14 @@ def relabel(folder: str, seed: int = 0, log=print) -> Dict[str, int]:
         hit = maps_goals.routes[r["route"]].junction_at(u)
         goal = maps_goals(r["route"], u)
         r["goal"] = str(goal)
+        r["junction"] = "1" if hit is not None else "0"
         counts[goal] += 1
         counts["junction"] += hit is not None
     backup = os.path.join(folder, "labels.csv.bak")
     if not os.path.exists(backup):
         shutil.copyfile(os.path.join(folder, "labels.csv"), backup)
     with open(os.path.join(folder, "labels.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=columns)
+        w = csv.DictWriter(f, fieldnames=columns + [c for c in ("junction",) if c not in columns])
         w.writeheader()
         w.writerows(rows)
     log("%s: %d rows, %d at junctions; goals -1/0/+1: %d/%d/%d"

@@ -4,6 +4,7 @@ on datasets written by sim4cv.driving_dataset.
     python3 -m sim4cv.driving_train --train DIR --val DIR --out OUT \\
         [--epochs N] [--batch 32] [--lr 5e-5] [--patience 5] [--downscale 2] \\
         [--goal] [--max-samples N] [--threads N] [--max-minutes M] [--force]
+        [--init MODEL.pt] [--junction-weight K]
 
 L2 (MSE) loss on the 8 offsets v1 h1 ... v4 h4, Adam, the validation loss
 after every epoch, early stopping on it (the best state is kept). Writes
@@ -27,14 +28,15 @@ from typing import Dict, List, Optional
 
 import numpy as np
 import torch
-from torch.utils.data import ConcatDataset, DataLoader, Dataset
+from torch.utils.data import ConcatDataset, DataLoader, Dataset, WeightedRandomSampler
 
 from sim4cv.driving_net import DEFAULT_HEIGHT, DEFAULT_WIDTH, WaypointNet, export_onnx
 
 TARGETS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
 REQUIRED = ["image"] + TARGETS + ["goal"]
 # the settings that make two models different (a rerun with other ones is refused unless --force)
-MODEL_SETTINGS = ("train", "val", "epochs", "batch", "lr", "patience", "downscale", "goal", "max_samples")
+MODEL_SETTINGS = ("train", "val", "epochs", "batch", "lr", "patience", "downscale", "goal", "max_samples",
+                  "junction_weight")
 
 
 class TrainError(Exception):
@@ -70,6 +72,9 @@ class DrivingDataset(Dataset):
         self.rows = read_labels(folder, max_samples)
         self.targets = np.array([[float(r[c]) for c in TARGETS] for r in self.rows], dtype=np.float32)
         self.goals = np.array([float(r["goal"] or 0) for r in self.rows], dtype=np.float32).reshape(-1, 1)
+        # relabel's column: the pose is at a junction of its route (None: not relabelled)
+        self.junction = (np.array([r["junction"] == "1" for r in self.rows])
+                         if "junction" in self.rows[0] else None)
         if not np.all(np.isfinite(self.targets)):
             raise TrainError("%s: labels.csv holds non-finite targets" % folder)
         self.height = DEFAULT_HEIGHT // downscale
@@ -111,6 +116,21 @@ def _evaluate(model, loader, use_goal):
     return total / max(n, 1)
 
 
+def _order(parts, folders, junction_weight: float, gen) -> dict:
+    """DataLoader arguments: a shuffle, or with junction_weight > 1 a draw in
+    which each junction sample is that many times as likely as another (as
+    many draws as samples: an epoch stays one dataset's worth)."""
+    if junction_weight == 1.0:
+        return dict(shuffle=True)
+    missing = [f for f, part in zip(folders, parts) if part.junction is None]
+    if missing:
+        raise TrainError("--junction-weight needs the junction column of `relabel`; %s has none (run "
+                         "python3 -m sim4cv.driving relabel --dataset %s)" % (", ".join(missing), " ".join(missing)))
+    junction = np.concatenate([part.junction for part in parts])
+    weights = torch.from_numpy(np.where(junction, junction_weight, 1.0))
+    return dict(sampler=WeightedRandomSampler(weights, len(junction), replacement=True, generator=gen))
+
+
 def _check_out(out: str, settings: dict, force: bool) -> None:
     path = os.path.join(out, "training.json")
     if os.path.exists(out) and not os.path.isdir(out):
@@ -133,17 +153,21 @@ def _check_out(out: str, settings: dict, force: bool) -> None:
 def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
           patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
           threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, init: str = "",
-          log=print) -> dict:
+          junction_weight: float = 1.0, log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
     if epochs < 1 or batch < 1 or lr <= 0:
         raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
+    if not junction_weight >= 1.0:
+        raise TrainError("--junction-weight must be >= 1, got %g" % junction_weight)
     train_dirs = [train_dir] if isinstance(train_dir, str) else list(train_dir)
     train_path = (os.path.abspath(train_dirs[0]) if len(train_dirs) == 1
                   else [os.path.abspath(d) for d in train_dirs])
     settings = dict(train=train_path, val=os.path.abspath(val_dir), epochs=epochs, batch=batch,
                     lr=lr, patience=patience, downscale=downscale, goal=goal, max_samples=max_samples,
                     threads=threads, seed=seed)
+    if junction_weight != 1.0:  # written only when used, so older models' settings still match
+        settings["junction_weight"] = junction_weight
     parts = [DrivingDataset(d, downscale, max_samples) for d in train_dirs]
     train_set = parts[0] if len(parts) == 1 else ConcatDataset(parts)
     train_set.height, train_set.width = parts[0].height, parts[0].width
@@ -175,7 +199,8 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
     opt = torch.optim.Adam(model.parameters(), lr=lr)
     gen = torch.Generator()
     gen.manual_seed(seed)
-    train_loader = DataLoader(train_set, batch_size=batch, shuffle=True, generator=gen)
+    train_loader = DataLoader(train_set, batch_size=batch, generator=gen,
+                              **_order(parts, train_dirs, junction_weight, gen))
     val_loader = DataLoader(val_set, batch_size=batch, shuffle=False)
 
     history, best, best_epoch, best_state, waited = [], math.inf, 0, None, 0
@@ -269,11 +294,14 @@ def main(argv: Optional[List[str]] = None) -> int:
                    help="stop after the epoch that passes this much training time (0: no limit)")
     p.add_argument("--init", default="", help="start from this model.pt's weights instead of random ones")
     p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
+    p.add_argument("--junction-weight", type=float, default=1.0,
+                   help="draw samples at junctions (relabel's junction column) this many times as often")
     a = p.parse_args(argv)
     try:
         train(a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience,
               downscale=a.downscale, goal=a.goal, max_samples=a.max_samples, threads=a.threads,
-              force=a.force, seed=a.seed, max_minutes=a.max_minutes, init=a.init, log=lambda m: print(m, flush=True))
+              force=a.force, seed=a.seed, max_minutes=a.max_minutes, init=a.init,
+              junction_weight=a.junction_weight, log=lambda m: print(m, flush=True))
     except TrainError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
