@@ -181,6 +181,8 @@ Camera effects (docs/protocol.md, "Camera effects"; all off by default, a lens d
                             to the run log FILE (docs/logs.md; extension .s4log by convention)
   --log-label TEXT          what the run is, e.g. the tracker's name, for the log's header (default:
                             the scene name)
+  --logs-dir DIR            where clients' StartLog writes run logs (the studio's "start log");
+                            default: none, StartLog is refused
   --replay FILE             the car and the UAV follow the poses of the run log FILE frame by frame
                             instead of physics, then hold the last pose; same scene and --frame-hz
   --replay-only IDS         with --replay, only these entities (e.g. 1: the target car) follow the
@@ -282,6 +284,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
        }},
       {"--log", [&](auto&, auto& v) { config.log_file = v; }},
       {"--log-label", [&](auto&, auto& v) { config.log_label = v; }},
+      {"--logs-dir", [&](auto&, auto& v) { config.logs_dir = v; }},
       {"--replay", [&](auto&, auto& v) { config.replay_file = v; }},
       {"--replay-only", [&](auto& f, auto& v) { config.replay_only = ParseIdList(f, v); }},
       {"--conditions",

@@ -84,6 +84,7 @@ struct Config {
   // the car and the UAV follow a recorded log's poses instead of physics.
   std::string log_file;               // empty: no run log
   std::string log_label;              // the log header's label; empty: the scene name
+  std::string logs_dir;               // where StartLog writes; empty: StartLog is refused
   std::string replay_file;            // empty: simulate
   std::vector<uint32_t> replay_only;  // entity ids that follow the log; empty: all (physics is not stepped)
 

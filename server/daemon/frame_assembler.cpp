@@ -93,8 +93,7 @@ render::FrameBuffers FrameAssembler::Targets(uint32_t index, const sim::CameraSp
 }
 
 void FrameAssembler::Assemble(uint32_t index, const sim::CameraSpec& spec, const sim::State& state,
-                              channels::ChannelSet wanted, const session::Scheduler& scheduler,
-                              session::Frame& frame) {
+                              channels::ChannelSet wanted, const session::Scheduler& scheduler, session::Frame& frame) {
   // The boxes are extracted from the instance mask.
   const bool boxes = channels::Has(wanted, proto::CHANNEL_BOXES);
   if (boxes) wanted |= channels::Bit(proto::CHANNEL_MASK);

@@ -11,8 +11,8 @@ namespace sim4cv::daemon {
 namespace {
 
 static_assert(sim::InfoOf(sim::EntityKind::kCar).log_class == runlog::kObjectClassCar &&
-              sim::InfoOf(sim::EntityKind::kUav).log_class == runlog::kObjectClassUav &&
-              sim::InfoOf(sim::EntityKind::kPedestrian).log_class == runlog::kObjectClassPedestrian,
+                  sim::InfoOf(sim::EntityKind::kUav).log_class == runlog::kObjectClassUav &&
+                  sim::InfoOf(sim::EntityKind::kPedestrian).log_class == runlog::kObjectClassPedestrian,
               "the entity kinds' run-log classes (sim/entity_kinds.h) are the log format's");
 
 uint16_t ObjectClassOf(sim::EntityKind kind) { return sim::InfoOf(kind).log_class; }
@@ -22,7 +22,7 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   header.creator = "sim4cvd " SIM4CV_VERSION;
   header.label = config.log_label.empty() ? scene.name : config.log_label;
   header.scene_name = scene.name;
-  header.map_path = config.map_file;
+  header.map_path = scene.map_path;
   header.physics_hz = config.physics_hz;
   header.frame_hz = config.frame_hz;
   header.seed = config.seed;

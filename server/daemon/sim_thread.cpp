@@ -245,6 +245,12 @@ void SimThread::Configure(session::ConfigureCommand& command) {
   };
   try {
     proto::Configured& answer = *reply.mutable_configured();
+    if (command.request.has_start_log() || command.request.has_stop_log()) {
+      answer.set_request_id(command.request.request_id());
+      ConfigureLog(command.request, answer);
+      if (command.link) command.link->OfferReply(std::move(reply));
+      return;
+    }
     const Simulation::Change change = sim_.Apply(command.request, answer);
     try {
       if (NeedsGraphics(change)) BuildGraphics();

@@ -59,6 +59,8 @@ class SimThread {
   // answers the client an Error saying why not.
   void ApplyTrackerOutput(session::ClientId client, session::TrackerOutputCommand& output);
   void Configure(session::ConfigureCommand& command);
+  // StartLog and StopLog (sim_thread_log.cpp): the sim thread owns the log.
+  void ConfigureLog(const proto::Configure& request, proto::Configured& answer);
   // Tells the scheduler and the clients what `change` did; `world` is the
   // answer's WorldInfo. The graphics are already built for it.
   void AfterChange(const Simulation::Change& change, const proto::WorldInfo& world);
@@ -85,7 +87,7 @@ class SimThread {
   session::StatePool state_pool_{4};
   Simulation sim_;
   CarDrivers drivers_;                 // who drives which car with Controls; --controls-timeout-ms
-  std::unique_ptr<RunLogger> logger_;  // null without --log; the scheduler's observer
+  std::unique_ptr<RunLogger> logger_;  // --log's or StartLog's, else null; the scheduler's observer
   session::Scheduler scheduler_;
   std::vector<session::Command> drained_;
   std::unique_ptr<render::GlContext> gl_;

@@ -4,9 +4,10 @@
 #include <filesystem>
 #include <numbers>
 
+#include "server/common/check.h"
 #include "server/common/limits.h"
 #include "server/daemon/map_authoring.h"
-#include "server/daemon/map_files.h"
+#include "server/daemon/named_files.h"
 #include "server/daemon/run_logger.h"
 #include "server/session/effects_wire.h"
 #include "server/sim/map/map_text.h"
@@ -46,7 +47,8 @@ Simulation::Simulation(const Config& config, std::shared_ptr<const sim::Scene> s
       conditions_(config.conditions),
       effects_(config.effects),
       randomize_seed_(config.randomize_seed),
-      randomize_every_(config.randomize_every_frames) {
+      randomize_every_(config.randomize_every_frames),
+      log_file_(config.log_file) {
   if (!config.replay_file.empty()) replay_ = LoadReplayTrack(config, *scene);
   Change ignored;
   Rebuild(std::move(scene), ignored);
@@ -179,6 +181,10 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       answer.set_map_text(ReadMapFile(config_.maps_dir, request.open_map().name()));
       change.world_changed = false;
       break;
+    case Kind::kStartLog:
+    case Kind::kStopLog:
+      SIM4CV_DEMAND(false);  // the sim thread's: it owns the log (SimThread::ConfigureLog)
+      break;
     case Kind::kSaveMap:
       CanonicalMapText(request.save_map().text(), "SaveMap.text (not saved; the file on disk is unchanged)");
       WriteMapFile(config_.maps_dir, request.save_map().name(), request.save_map().text(),
@@ -232,6 +238,7 @@ void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
   const float speed = load.car_speed() > 0 ? load.car_speed() : config_.car_speed;
   auto scene = Checked([&] {
     sim::Scene built = sim::SceneFromMap(std::move(loaded), load.route(), speed, config_.width, config_.height);
+    if (load.has_name()) built.map_path = config_.maps_dir + "/" + load.name() + ".map";
     try {
       sim::AddTraffic(built, TrafficFor(load));
     } catch (const std::invalid_argument& error) {
@@ -257,10 +264,12 @@ traffic::TrafficConfig Simulation::TrafficFor(const proto::LoadMap& load) const 
 }
 
 void Simulation::RefuseWhileLogging(const char* request, const char* why) const {
-  if (config_.log_file.empty()) return;
+  if (log_file_.empty()) return;
+  const bool started = config_.log_file.empty();  // by a client's StartLog, not --log
   throw ConfigureError(proto::ERROR_CODE_INVALID_STATE,
-                       std::string(request) + " is refused while the daemon writes the run log --log " +
-                           config_.log_file + ": " + why + "; start another sim4cvd without --log for this");
+                       std::string(request) + " is refused while the daemon writes the run log " +
+                           (started ? "" : "--log ") + log_file_ + ": " + why +
+                           (started ? "; StopLog first" : "; start another sim4cvd without --log for this"));
 }
 
 const sim::Entity& Simulation::EntityOf(uint32_t id, const char* what) const {
@@ -515,6 +524,7 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   out.Clear();
   out.set_scene_name(scene_->name);
   out.set_frame_id(state_.frame_id);
+  out.set_log_file(log_file_);
   for (const sim::Entity& entity : state_.entities) {
     proto::EntityInfo* info = out.add_entities();
     info->set_id(entity.id);

@@ -71,6 +71,13 @@ class Simulation {
   bool AdvanceConditions();
   // Camera effects: the config's, then changed field by field by SetEffects.
   const effects::CameraEffects& effects() const { return effects_; }
+  // Domain randomisation in force: seed (0: off) and period (0: per episode).
+  uint64_t randomize_seed() const { return randomize_seed_; }
+  uint32_t randomize_every() const { return randomize_every_; }
+  // The run log being written (--log or StartLog; empty: none): while there
+  // is one, LoadMap, Reset and SetConditions are refused naming it.
+  const std::string& log_file() const { return log_file_; }
+  void SetLogFile(std::string path) { log_file_ = std::move(path); }
 
  private:
   void Rebuild(std::shared_ptr<const sim::Scene> scene, Change& change);
@@ -93,7 +100,7 @@ class Simulation {
   const sim::Entity& EntityOf(uint32_t id, const char* what) const;
   // The traffic a LoadMap asks for: its settings, else the daemon's flags.
   traffic::TrafficConfig TrafficFor(const proto::LoadMap& load) const;
-  // Throws INVALID_STATE naming --log if the daemon writes a run log.
+  // Throws INVALID_STATE naming the log if the daemon writes one.
   void RefuseWhileLogging(const char* request, const char* why) const;
 
   // What Undo() restores; empty unless the last Apply replaced the world.
@@ -123,6 +130,7 @@ class Simulation {
   void StartEpisode(Change& change);
   void DrawConditions();
   std::shared_ptr<const runlog::ReplayTrack> replay_;  // --replay; kept across Reset
+  std::string log_file_;
 };
 
 }  // namespace sim4cv::daemon

@@ -304,8 +304,14 @@ std::string CheckConfigure(const proto::Configure& request) {
           .MapName("SaveMap.name", request.save_map().name())
           .MapText("SaveMap.text", request.save_map().text())
           .problem();
+    case Kind::kStartLog:
+      return Checker()
+          .MapName("StartLog.name", request.start_log().name())
+          .Name("StartLog.label", request.start_log().label(), true)
+          .problem();
     case Kind::kRemove:
     case Kind::kReset:
+    case Kind::kStopLog:
     case Kind::kGetWorld:
     case Kind::kListMaps:
       return {};

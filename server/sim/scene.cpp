@@ -10,8 +10,8 @@
 #include "server/common/check.h"
 #include "server/common/limits.h"
 #include "server/common/regular_file.h"
-#include "server/sim/vehicles/polyline.h"
 #include "server/sim/map/map_text.h"
+#include "server/sim/vehicles/polyline.h"
 
 namespace sim4cv::sim {
 
@@ -65,20 +65,27 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
   using Handler = std::function<void(std::istringstream&)>;
   // Each keyword consumes the rest of its line; see docs/scenes.md.
   const std::map<std::string, Handler> handlers = {
-      {"scene", [&](std::istringstream& w) { SIM4CV_THROW_UNLESS(w >> scene.name, "scene line " << line_number << ": scene needs a name"); }},
-      {"ground", [&](std::istringstream& w) {
+      {"scene",
+       [&](std::istringstream& w) {
+         SIM4CV_THROW_UNLESS(w >> scene.name, "scene line " << line_number << ": scene needs a name");
+       }},
+      {"ground",
+       [&](std::istringstream& w) {
          scene.ground_half_size = ReadNumbers(w, 1, line_number, line)[0];
          RequirePositive(scene.ground_half_size, "ground half size", line_number, line);
        }},
-      {"lane_width", [&](std::istringstream& w) {
+      {"lane_width",
+       [&](std::istringstream& w) {
          scene.lane_width = ReadNumbers(w, 1, line_number, line)[0];
          RequirePositive(scene.lane_width, "lane width", line_number, line);
        }},
-      {"road", [&](std::istringstream& w) {
+      {"road",
+       [&](std::istringstream& w) {
          const auto v = ReadNumbers(w, 2, line_number, line);
          scene.road_loop.emplace_back(v[0], v[1]);
        }},
-      {"building", [&](std::istringstream& w) {
+      {"building",
+       [&](std::istringstream& w) {
          const auto v = ReadNumbers(w, 6, line_number, line);
          BuildingSpec b;
          b.id = kFirstBuildingId + static_cast<uint32_t>(scene.buildings.size());
@@ -89,17 +96,21 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
          RequirePositive(std::min({v[2], v[3], v[4]}), "building size", line_number, line);
          scene.buildings.push_back(b);
        }},
-      {"car_speed", [&](std::istringstream& w) {
+      {"car_speed",
+       [&](std::istringstream& w) {
          scene.car.cruise_speed = ReadNumbers(w, 1, line_number, line)[0];
          RequirePositive(scene.car.cruise_speed, "car speed", line_number, line);
        }},
-      {"uav_altitude", [&](std::istringstream& w) {
+      {"uav_altitude",
+       [&](std::istringstream& w) {
          scene.uav.altitude = ReadNumbers(w, 1, line_number, line)[0];
          RequirePositive(scene.uav.altitude, "uav altitude", line_number, line);
        }},
-      {"camera_pitch", [&](std::istringstream& w) {
+      {"camera_pitch",
+       [&](std::istringstream& w) {
          const float pitch = ReadNumbers(w, 1, line_number, line)[0];
-         SIM4CV_THROW_UNLESS(pitch > 0 && pitch <= 90, "scene line " << line_number << " '" << line << "': camera pitch must be in (0, 90]");
+         SIM4CV_THROW_UNLESS(pitch > 0 && pitch <= 90,
+                             "scene line " << line_number << " '" << line << "': camera pitch must be in (0, 90]");
          camera_pitch_deg = pitch;
        }},
   };
@@ -110,11 +121,12 @@ Scene ParseScene(const std::string& text, uint32_t camera_width, uint32_t camera
     std::string keyword;
     if (!(words >> keyword)) continue;
     const auto handler = handlers.find(keyword);
-    SIM4CV_THROW_UNLESS(handler != handlers.end(), "scene line " << line_number << ": unknown keyword '" << keyword << "'");
+    SIM4CV_THROW_UNLESS(handler != handlers.end(),
+                        "scene line " << line_number << ": unknown keyword '" << keyword << "'");
     handler->second(words);
   }
-  SIM4CV_THROW_UNLESS(scene.road_loop.size() >= 3,
-                      "scene '" << scene.name << "' has " << scene.road_loop.size() << " road points; a loop needs at least 3");
+  SIM4CV_THROW_UNLESS(scene.road_loop.size() >= 3, "scene '" << scene.name << "' has " << scene.road_loop.size()
+                                                             << " road points; a loop needs at least 3");
   SIM4CV_THROW_UNLESS(scene.buildings.size() < 65535 - kFirstBuildingId, "scene has too many buildings");
   AddStandardCameras(scene, camera_width, camera_height, camera_pitch_deg);
   std::vector<Eigen::Vector2d> road;
@@ -152,8 +164,10 @@ Scene SceneFromMap(std::shared_ptr<const map::Map> loaded, const std::string& ro
 
 Scene SceneFromMap(const std::string& map_path, const std::string& route_name, float car_speed, uint32_t camera_width,
                    uint32_t camera_height) {
-  return SceneFromMap(std::make_shared<const map::Map>(map::LoadMapFile(map_path)), route_name, car_speed, camera_width,
-                      camera_height);
+  Scene scene = SceneFromMap(std::make_shared<const map::Map>(map::LoadMapFile(map_path)), route_name, car_speed,
+                             camera_width, camera_height);
+  scene.map_path = map_path;
+  return scene;
 }
 
 traffic::TrafficIds TrafficIdsOf(const Scene& scene) {
@@ -165,15 +179,18 @@ traffic::TrafficIds TrafficIdsOf(const Scene& scene) {
 void AddTraffic(Scene& scene, traffic::TrafficConfig config) {
   const bool wants_entities = config.moving_cars > 0 || config.parked_cars > 0 || config.pedestrians > 0;
   if (!scene.map) {
-    SIM4CV_THROW_UNLESS(!wants_entities, "traffic (--traffic-cars, --traffic-parked, --traffic-pedestrians) needs a "
-                                       "tile map (--map); scene '" << scene.name << "' has none");
+    SIM4CV_THROW_UNLESS(!wants_entities,
+                        "traffic (--traffic-cars, --traffic-parked, --traffic-pedestrians) needs a "
+                        "tile map (--map); scene '"
+                            << scene.name << "' has none");
     return;
   }
   config.traffic_lights = config.traffic_lights && scene.map->surroundings == map::Surroundings::kUrban;
   if (!wants_entities && !config.traffic_lights) return;
   scene.traffic = std::make_shared<const traffic::TrafficPlan>(*scene.map, *scene.road_graph, config);
-  SIM4CV_THROW_UNLESS(TrafficIdsOf(scene).end <= 65535, "map '" << scene.name << "' with this much traffic needs ids up to "
-                                                                << TrafficIdsOf(scene).end << "; the instance mask holds 65535");
+  SIM4CV_THROW_UNLESS(TrafficIdsOf(scene).end <= 65535,
+                      "map '" << scene.name << "' with this much traffic needs ids up to " << TrafficIdsOf(scene).end
+                              << "; the instance mask holds 65535");
 }
 
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height) {

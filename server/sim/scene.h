@@ -52,13 +52,16 @@ struct CameraSpec {
   // turns only with its yaw; false: rigidly fixed to the body.
   bool gimbal = true;
   Eigen::Vector3d offset{0.0, 0.0, -0.3};  // mount point in the body frame (x forward, y left, z up), m
-  float yaw_deg = 0.0f;  // fixed mounts: turned left of the body's x axis (a side or rear view)
+  float yaw_deg = 0.0f;                    // fixed mounts: turned left of the body's x axis (a side or rear view)
 };
 
 struct Scene {
   std::string name = "default";
-  float ground_half_size = 150.0f;  // metres
-  float lane_width = 4.0f;          // metres; the road has two lanes
+  // The map file it was built from, as given (a run log's header records
+  // it); empty for a scene file, the built-in scene and map text.
+  std::string map_path;
+  float ground_half_size = 150.0f;         // metres
+  float lane_width = 4.0f;                 // metres; the road has two lanes
   std::vector<Eigen::Vector2f> road_loop;  // closed centre line, in driving order
   std::vector<BuildingSpec> buildings;
   CarSpec car;

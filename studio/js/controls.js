@@ -23,6 +23,7 @@ export class Controls {
     $("reset").onclick = () => this.run("Reset", { reset: {} }, true);
     $("add-camera").onclick = () => this.addCamera();
     $("follow").onclick = () => this.follow();
+    $("log-toggle").onclick = () => this.toggleLog();
     $("remove-entity").onclick = () => {
       if (this.selected) this.run("Remove", { remove: { entity_id: this.selected.id } });
     };
@@ -41,6 +42,27 @@ export class Controls {
     mount.value = current;
     const look = world.conditions || {};
     $("conditions-now").textContent = `${look.preset || "?"}, ${Number(look.hour || 0).toFixed(1)} h, ${look.quality || "?"}`;
+    this.logFile = world.log_file || "";
+    $("log-now").textContent = this.logFile || "none";
+    $("log-toggle").textContent = this.logFile ? "stop log" : "start log";
+  }
+
+  // StartLog under the daemon's --logs-dir, or StopLog; an existing file is
+  // replaced only when the person says so.
+  async toggleLog() {
+    if (this.logFile) return this.run("StopLog", { stop_log: {} });
+    const request = { name: $("log-name").value.trim(), label: $("log-label").value };
+    try {
+      await this.app.control.configure({ start_log: request });
+    } catch (error) {
+      if (error.code !== "ERROR_CODE_ALREADY_EXISTS" || !confirm(`${error.message}\n\nReplace it?`)) {
+        this.app.reportError(error, "StartLog");
+        return null;
+      }
+      return this.run("StartLog", { start_log: { ...request, overwrite: true } });
+    }
+    this.app.note("StartLog done");
+    return this.app.refreshWorld(false);
   }
 
   async run(what, request, newWorld = false) {

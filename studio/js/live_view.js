@@ -9,7 +9,7 @@ import { CHANNELS, CLASS_COLOURS, className, toRgba } from "./colours.js";
 
 export class LiveView {
   // app: {cameras(), clockOffsetMs, reportError(error)}; index: for ids;
-  // options: {boxes: false} starts without the boxes (a view to drive by).
+  // options: {boxes: false} starts without drawing the boxes (a view to drive by).
   constructor(app, parent, index, camera, channel = "CHANNEL_RGB", options = {}) {
     this.app = app;
     this.index = index;
@@ -58,7 +58,7 @@ export class LiveView {
     channel.value = this.channel;
     channel.onchange = () => { this.channel = channel.value; this.subscribe(); };
     panel.querySelector("input.boxes").checked = this.boxes;
-    panel.querySelector("input.boxes").onchange = (e) => { this.boxes = e.target.checked; this.subscribe(); };
+    panel.querySelector("input.boxes").onchange = (e) => { this.boxes = e.target.checked; };
     const rgb = panel.querySelector("select.rgb");
     rgb.onchange = () => { this.rgb = rgb.value; this.reconnect(); };
     const fps = panel.querySelector("select.fps");
@@ -97,8 +97,9 @@ export class LiveView {
 
   async subscribe() {
     if (!this.socket || !this.camera) return;
-    const channels = [this.channel];
-    if (this.boxes) channels.push("CHANNEL_BOXES");
+    // The boxes' channel also brings the camera's pose and intrinsics, which a
+    // view to drive by or the editor's preview uses without drawing the boxes.
+    const channels = [this.channel, "CHANNEL_BOXES"];
     this.frames = 0;
     this.frameTimes = [];
     try {

@@ -147,6 +147,16 @@ def test_map_files_generate_and_check(start_daemon, connect, tmp_path):
     refused(lambda: client.open_map("../outside"), pb.ERROR_CODE_INVALID_ARGUMENT, "OpenMap.name '../outside'")
 
 
+def test_start_and_stop_a_run_log(start_daemon, connect, tmp_path):
+    own = start_daemon("--logs-dir", str(tmp_path), "--mode", "realtime")
+    client = connect("logger", target=own)
+    path = client.start_log("runs/first", label="python")
+    assert path == str(tmp_path / "runs" / "first.s4log") and client.get_world().log_file == path
+    refused(lambda: client.reset(), pb.ERROR_CODE_INVALID_STATE, "StopLog first")
+    assert client.stop_log() == path and client.get_world().log_file == ""
+    assert (tmp_path / "runs" / "first.s4log").read_bytes()[:8] == b"S4CVLOG\0"
+
+
 def test_configure_errors_name_the_problem(connect):
     client = connect("configure")
     refused(lambda: client.load_map_text("sim4cv-map 1\nname broken\ncolour red\n"),

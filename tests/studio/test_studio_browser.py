@@ -197,3 +197,34 @@ def test_reset_and_load_map_from_the_page(page, stepper):
     page.wait_for("studio.map.map && studio.map.map.surroundings === 'desert'", TIMEOUT_S)
     assert stepper.get_world().scene_name == page.evaluate("studio.world.scene_name")
     assert page.evaluate("studio.errors.length") == 0, page.evaluate("studio.errors")
+
+
+def test_a_run_log_started_and_stopped_from_the_page(studio_daemon, tmp_path):
+    daemon = studio_daemon("--map", MAP, "--logs-dir", str(tmp_path), mode="realtime")
+    checker = sim4cv.connect(daemon.address, name="checker")
+    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?max_fps=5" % daemon.http,
+                                          "window.studio && studio.ready") as page:
+        choose(page, "#log-name", "studio/run_1")
+        page.evaluate("document.getElementById('log-label').value = 'from the page'")
+        press(page, "#log-toggle")
+        path = str(tmp_path / "studio" / "run_1.s4log")
+        page.wait_for("document.getElementById('log-now').textContent === %s" % json.dumps(path), TIMEOUT_S)
+        assert checker.get_world().log_file == path
+        assert page.evaluate("document.getElementById('log-toggle').textContent") == "stop log"
+        start = checker.get_state().frame_id
+        while checker.get_state().frame_id < start + 30:
+            time.sleep(0.05)
+        press(page, "#log-toggle")
+        page.wait_for("document.getElementById('log-now').textContent === 'none'", TIMEOUT_S)
+        assert checker.get_world().log_file == ""
+        with open(path, "rb") as f:
+            data = f.read()
+        assert data[:8] == b"S4CVLOG\0" and len(data) > 30 * 100, len(data)  # a header and ~30 records
+        page.evaluate("window.asked = []; window.confirm = (m) => { asked.push(m); return true; }")
+        press(page, "#log-toggle")  # the same name again: the page asks before replacing it
+        page.wait_for("document.getElementById('log-now').textContent === %s" % json.dumps(path), TIMEOUT_S)
+        assert "exists" in page.evaluate("asked[0]")
+        press(page, "#log-toggle")
+        page.wait_for("document.getElementById('log-now').textContent === 'none'", TIMEOUT_S)
+        assert page.evaluate("studio.errors.length") == 0, page.evaluate("studio.errors")
+    checker.close()

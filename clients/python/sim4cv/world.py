@@ -179,6 +179,15 @@ class WorldRequests:
         list_maps gives)."""
         return self.configure(pb.Configure(open_map=pb.OpenMap(name=name))).map_text
 
+    def start_log(self, name, label="", overwrite=False):
+        """Starts a run log of every frame from the next one on, NAME.s4log
+        under the daemon's --logs-dir (docs/logs.md); returns its path."""
+        return self.configure(pb.Configure(start_log=pb.StartLog(name=name, label=label, overwrite=overwrite))).log_file
+
+    def stop_log(self):
+        """Stops the run log start_log began; returns its path."""
+        return self.configure(pb.Configure(stop_log=pb.StopLog())).log_file
+
     def save_map(self, name, text, overwrite=False):
         """Writes text to NAME.map under the daemon's --maps-dir, if the
         daemon's parser accepts it; an existing file only with overwrite."""

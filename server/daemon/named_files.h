@@ -1,8 +1,9 @@
-// The maps folder (--maps-dir): the names LoadMap.name and ListMaps use, and
-// the studio's OpenMap / SaveMap. Every path is confined to the folder: a
-// name is checked part by part on the network thread (configure_check), and
-// here no symbolic link is followed out of it. Runs on the sim thread,
-// between frames, like LoadMap's own file.
+// The files clients reach by name: maps under --maps-dir (LoadMap.name,
+// ListMaps, the studio's OpenMap / SaveMap) and run logs under --logs-dir
+// (StartLog). Every path is confined to its folder: a name is checked part
+// by part on the network thread (configure_check), and here no symbolic link
+// is followed out of it. Runs on the sim thread, between frames, like
+// LoadMap's own file.
 #pragma once
 
 #include <google/protobuf/repeated_ptr_field.h>
@@ -29,5 +30,12 @@ std::string ReadMapFile(const std::string& maps_dir, const std::string& name);
 // INVALID_ARGUMENT for a symbolic link or a non-folder on the way, IO when
 // the system refuses (the message names the path and the reason).
 void WriteMapFile(const std::string& maps_dir, const std::string& name, const std::string& text, bool overwrite);
+
+// The path of a new run log "<logs_dir>/<name>.s4log" (missing folders
+// created), for runlog::RunLogWriter to create. Throws ConfigureError:
+// INVALID_STATE without --logs-dir, ALREADY_EXISTS when the file exists and
+// !overwrite, INVALID_ARGUMENT for a symbolic link or a non-folder on the
+// way, IO when a folder cannot be made.
+std::string NewLogPath(const std::string& logs_dir, const std::string& name, bool overwrite);
 
 }  // namespace sim4cv::daemon

@@ -1,4 +1,4 @@
-#include "server/daemon/map_files.h"
+#include "server/daemon/named_files.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -24,23 +24,23 @@ namespace {
 
 std::string SystemReason(int error) { return std::strerror(error); }
 
-// The folder every studio path lives under; it must exist (a daemon started
-// with a --maps-dir that does not is told so, not given a new folder).
-fs::path Root(const std::string& maps_dir) {
+// The folder named paths live under; it must exist (a daemon started with a
+// --maps-dir that does not is told so, not given a new folder).
+fs::path Root(const std::string& dir, const char* what, const char* flag) {
   std::error_code error;
-  if (!fs::is_directory(maps_dir, error)) {
-    Fail(proto::ERROR_CODE_IO, "the maps folder " + Quoted(maps_dir) +
-                                   " (sim4cvd --maps-dir) is not a folder; start sim4cvd with --maps-dir naming one");
+  if (!fs::is_directory(dir, error)) {
+    Fail(proto::ERROR_CODE_IO, std::string("the ") + what + " " + Quoted(dir) + " (sim4cvd " + flag +
+                                   ") is not a folder; start sim4cvd with " + flag + " naming one");
   }
-  return fs::path(maps_dir);
+  return fs::path(dir);
 }
 
 // Walks `name`'s folders under `root`, refusing a symbolic link or a file
 // where a folder belongs (creating missing folders when `create`); returns
 // the map file's path.
-fs::path Confined(const fs::path& root, const std::string& name, bool create) {
+fs::path Confined(const fs::path& root, const std::string& name, const char* extension, bool create) {
   fs::path at = root;
-  const fs::path relative(name + ".map");
+  const fs::path relative(name + extension);
   for (auto part = relative.begin(); part != relative.end(); ++part) {
     at /= *part;
     const bool last = std::next(part) == relative.end();
@@ -103,7 +103,7 @@ void ListMapNames(const std::string& maps_dir, google::protobuf::RepeatedPtrFiel
 }
 
 std::string ReadMapFile(const std::string& maps_dir, const std::string& name) {
-  const fs::path path = Confined(Root(maps_dir), name, false);
+  const fs::path path = Confined(Root(maps_dir, "maps folder", "--maps-dir"), name, ".map", false);
   std::error_code error;
   if (!fs::is_regular_file(path, error)) {
     Fail(proto::ERROR_CODE_INVALID_ARGUMENT,
@@ -124,7 +124,7 @@ std::string ReadMapFile(const std::string& maps_dir, const std::string& name) {
 }
 
 void WriteMapFile(const std::string& maps_dir, const std::string& name, const std::string& text, bool overwrite) {
-  const fs::path path = Confined(Root(maps_dir), name, true);
+  const fs::path path = Confined(Root(maps_dir, "maps folder", "--maps-dir"), name, ".map", true);
   std::error_code error;
   if (fs::exists(path, error)) {
     if (!overwrite) {
@@ -154,6 +154,26 @@ void WriteMapFile(const std::string& maps_dir, const std::string& name, const st
     Fail(proto::ERROR_CODE_IO,
          "cannot write " + Quoted(path.string()) + ": " + SystemReason(reason) + "; the file on disk is unchanged");
   }
+}
+
+std::string NewLogPath(const std::string& logs_dir, const std::string& name, bool overwrite) {
+  if (logs_dir.empty()) {
+    Fail(proto::ERROR_CODE_INVALID_STATE,
+         "StartLog: sim4cvd was started without --logs-dir, so clients cannot write run logs; start it with "
+         "--logs-dir DIR (or record the whole run with --log FILE)");
+  }
+  const fs::path path = Confined(Root(logs_dir, "logs folder", "--logs-dir"), name, ".s4log", true);
+  std::error_code error;
+  if (fs::exists(path, error)) {
+    if (!overwrite) {
+      Fail(proto::ERROR_CODE_ALREADY_EXISTS,
+           "StartLog: " + Quoted(path.string()) + " exists; set overwrite to replace it, or choose another name");
+    }
+    if (!fs::is_regular_file(path, error)) {
+      Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(path.string()) + " is not a regular file: choose another name");
+    }
+  }
+  return path.string();
 }
 
 }  // namespace sim4cv::daemon
