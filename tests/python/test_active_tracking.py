@@ -9,7 +9,7 @@ import types
 import numpy as np
 import pytest
 
-from sim4cv import active_tracking
+from sim4cv import active_tracking, env_base
 from sim4cv.active_tracking import ActiveTrackingEnv
 
 
@@ -166,9 +166,11 @@ def test_uses_gymnasium_when_it_imports(monkeypatch):
     monkeypatch.setitem(sys.modules, "gymnasium", gym)
     monkeypatch.setitem(sys.modules, "gymnasium.spaces", spaces)
     try:
+        base = importlib.reload(env_base)
         module = importlib.reload(active_tracking)
         assert issubclass(module.ActiveTrackingEnv, Env)
-        assert isinstance(module._box_space(0, 255, (2, 2, 3), np.uint8), Box)
+        assert isinstance(base.box(0, 255, (2, 2, 3), np.uint8), Box)
     finally:
         monkeypatch.undo()
+        importlib.reload(env_base)
         importlib.reload(active_tracking)

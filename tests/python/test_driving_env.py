@@ -17,7 +17,7 @@ REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file_
 sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 
 from sim4cv import driving_env as de  # noqa: E402
-from sim4cv import driving_env_spaces as des  # noqa: E402
+from sim4cv import env_base as des  # noqa: E402
 from sim4cv import driving_metrics as dm  # noqa: E402
 
 DESERT = os.path.join(REPO_ROOT, "scenes", "driving", "test", "01_desert.map")

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "channel_colours.h"
+#include "flags.h"
 #include "sim4cv/client.h"
 
 namespace {
@@ -36,24 +37,8 @@ struct Options {
   int save = 5;
 };
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-int ParseInt(const std::string& flag, const std::string& text, int min, int max) {
-  std::size_t used = 0;
-  int value = 0;
-  try {
-    value = std::stoi(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || value < min || value > max) {
-    throw UsageError(flag + " wants an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "], got '" +
-                     text + "'");
-  }
-  return value;
-}
+using sim4cv::examples::ParseNumber;
+using sim4cv::examples::UsageError;
 
 Options ParseArgs(int argc, char** argv) {
   Options options;
@@ -67,13 +52,13 @@ Options ParseArgs(int argc, char** argv) {
     } else if (flag == "--host") {
       options.host = value;
     } else if (flag == "--port") {
-      options.port = ParseInt(flag, value, 1, 65535);
+      options.port = ParseNumber(flag, value, 1, 65535);
     } else if (flag == "--frames") {
-      options.frames = ParseInt(flag, value, 1, 100000000);
+      options.frames = ParseNumber(flag, value, 1, 100000000);
     } else if (flag == "--out") {
       options.out = value;
     } else if (flag == "--save") {
-      options.save = ParseInt(flag, value, 0, 100000000);
+      options.save = ParseNumber(flag, value, 0, 100000000);
     } else {
       throw UsageError("unknown flag: " + flag);
     }

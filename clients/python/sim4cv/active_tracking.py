@@ -80,13 +80,8 @@ import numpy as np
 
 import sim4cv
 from sim4cv.daemon import REPO_ROOT, OwnDaemon
+from sim4cv.env_base import Box, SimEnv, box  # noqa: F401 (Box: re-exported)
 
-try:  # pragma: no cover - depends on the host
-    import gymnasium as _gym
-    from gymnasium import spaces as _spaces
-except ImportError:
-    _gym = None
-    _spaces = None
 
 MAPS_DIR = os.path.join(REPO_ROOT, "scenes")
 
@@ -95,54 +90,6 @@ class ActiveTrackingError(RuntimeError):
     """The environment could not start or talk to its daemon."""
 
 
-# ----------------------------------------------------------------------------- spaces without gymnasium
-
-
-class Box:
-    """A stand-in for gymnasium.spaces.Box when gymnasium is not installed:
-    shape, dtype, low, high (arrays of that shape), sample(), contains(x),
-    seed(s)."""
-
-    def __init__(self, low, high, shape=None, dtype=np.float32, seed=None):
-        self.dtype = np.dtype(dtype)
-        if shape is None:
-            shape = np.shape(low)
-        self.shape = tuple(int(n) for n in shape)
-        self.low = np.broadcast_to(np.asarray(low, dtype=self.dtype), self.shape).copy()
-        self.high = np.broadcast_to(np.asarray(high, dtype=self.dtype), self.shape).copy()
-        self._rng = np.random.default_rng(seed)
-
-    def seed(self, seed=None):
-        self._rng = np.random.default_rng(seed)
-        return [seed]
-
-    def sample(self):
-        if np.issubdtype(self.dtype, np.integer):
-            return self._rng.integers(self.low, self.high, size=self.shape, endpoint=True, dtype=self.dtype)
-        return self._rng.uniform(self.low, self.high, size=self.shape).astype(self.dtype)
-
-    def contains(self, x):
-        x = np.asarray(x)
-        if x.shape != self.shape:
-            return False
-        if np.issubdtype(self.dtype, np.integer) and not np.issubdtype(x.dtype, np.integer):
-            return False
-        return bool(np.all(x >= self.low) and np.all(x <= self.high))
-
-    def __contains__(self, x):
-        return self.contains(x)
-
-    def __repr__(self):
-        return "Box(%s, %s, %s, %s)" % (self.low.min(), self.high.max(), self.shape, self.dtype)
-
-
-def _box_space(low, high, shape, dtype):
-    if _spaces is not None:
-        return _spaces.Box(low=low, high=high, shape=shape, dtype=dtype)
-    return Box(low, high, shape, dtype)
-
-
-_EnvBase = _gym.Env if _gym is not None else object
 
 
 # ----------------------------------------------------------------------------- the daemon
@@ -193,7 +140,7 @@ def _to_world(forward, sideways, heading_deg):
 # ----------------------------------------------------------------------------- the environment
 
 
-class ActiveTrackingEnv(_EnvBase):
+class ActiveTrackingEnv(SimEnv):
     """Fly the UAV by heading-frame velocity commands from its camera's
     images and keep the target car straight ahead at the ideal distance.
     See the module's docstring (and docs/tracking.md, "Active tracking") for
@@ -269,9 +216,9 @@ class ActiveTrackingEnv(_EnvBase):
             raise
 
         h, w = self._image_size
-        self.observation_space = _box_space(0, 255, (h // self.downscale, w // self.downscale, 3), np.uint8)
+        self.observation_space = box(0, 255, (h // self.downscale, w // self.downscale, 3), np.uint8)
         high = np.array([self.max_speed, self.max_speed, self.max_yaw_rate], dtype=np.float32)
-        self.action_space = _box_space(-high, high, (3,), np.float32)
+        self.action_space = box(-high, high, (3,), np.float32)
 
         self._frame = None      # the last sim4cv.Frame
         self._rgb = None        # its full-size image (a copy)
@@ -281,7 +228,6 @@ class ActiveTrackingEnv(_EnvBase):
         self._done = True
         self._d_star = None
         self._d_max = None
-        self._rng_fallback = None
 
     # ------------------------------------------------------------------ setup
 
@@ -305,12 +251,8 @@ class ActiveTrackingEnv(_EnvBase):
 
     @property
     def rng(self):
-        """The env's random generator (gymnasium's np_random when available)."""
-        if _gym is not None:
-            return self.np_random
-        if self._rng_fallback is None:
-            self._rng_fallback = np.random.default_rng()
-        return self._rng_fallback
+        """The env's random generator: np_random (gymnasium's, or the same draws without it)."""
+        return self.np_random
 
     # ------------------------------------------------------------------ frames
 
@@ -368,10 +310,7 @@ class ActiveTrackingEnv(_EnvBase):
     def reset(self, seed=None, options=None):
         """Back to the world's start, the UAV behind the target; returns
         (observation, info). See the module's docstring."""
-        if _gym is not None:
-            super().reset(seed=seed)
-        elif seed is not None or self._rng_fallback is None:
-            self._rng_fallback = np.random.default_rng(seed)
+        super().reset(seed=seed)
         if self._closed:
             raise ActiveTrackingError("the environment is closed")
         options = dict(options or {})
@@ -464,33 +403,6 @@ class ActiveTrackingEnv(_EnvBase):
     def render(self):
         """The last frame's RGB image at full size, (H, W, 3) uint8 (None before reset)."""
         return None if self._rgb is None else self._rgb.copy()
-
-    def close(self):
-        """Ends the session and stops the env's own daemon (if it started one)."""
-        if self._closed:
-            return
-        self._closed = True
-        self._done = True
-        if self.client is not None:
-            try:
-                self.client.close()
-            except Exception:
-                pass
-        if self.daemon is not None:
-            self.daemon.stop()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
-
-    def __del__(self):
-        try:
-            self.close()
-        except Exception:
-            pass
 
     # ------------------------------------------------------------------ a scripted baseline
 

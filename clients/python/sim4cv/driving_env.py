@@ -13,7 +13,7 @@
 `DrivingEnv` subclasses `gymnasium.Env` when `import gymnasium` works and
 is otherwise a plain class with the same methods (the same code runs in
 both cases); its spaces are `gymnasium.spaces.Box` / `Dict` or, without
-gymnasium, the stand-ins `Box` (sim4cv.active_tracking) and `DictSpace`
+gymnasium, the stand-ins `Box` and `DictSpace` (sim4cv.env_base)
 below (shape, dtype, low, high, sample(), contains()).
 
 Episode (reset(seed=None, options=None)): from the env's seeded generator
@@ -91,7 +91,7 @@ from .daemon import OwnDaemon
 from .driving_dataset import CAMERA_SETTINGS, WAYPOINT_COUNT, WAYPOINT_STEP_M, RoutePath, parse_map, \
     resolve_maps
 from .driving_eval import ReferencePolicy, yaw_of
-from .driving_env_spaces import DictSpace, _EnvBase, _box, _dict  # noqa: F401 (DictSpace: re-exported)
+from .env_base import DictSpace, SimEnv, box, dict_space  # noqa: F401 (DictSpace: re-exported)
 from .errors import ServerError
 
 
@@ -128,7 +128,7 @@ class DrivingEnvError(RuntimeError):
 
 # ----------------------------------------------------------------------------- the environment
 
-class DrivingEnv(_EnvBase):
+class DrivingEnv(SimEnv):
     """Drive the ego car along a route of a driving map from its camera's
     images. See the module's docstring (and docs/driving.md, "Driving
     environment (Gym)") for the spaces, reward and episode rules.
@@ -217,9 +217,9 @@ class DrivingEnv(_EnvBase):
             if c in CHANNEL_SPECS:
                 components, dtype, low, high = CHANNEL_SPECS[c]
                 shape = (h, w) if components == 1 else (h, w, components)
-                observation[c] = _box(low, high, shape, dtype)
-        self.observation_space = _dict(observation)
-        self.action_space = _box(np.array([-1.0, 0.0, 0.0], dtype=np.float32),
+                observation[c] = box(low, high, shape, dtype)
+        self.observation_space = dict_space(observation)
+        self.action_space = box(np.array([-1.0, 0.0, 0.0], dtype=np.float32),
                                  np.array([1.0, 1.0, 1.0], dtype=np.float32), (3,), np.float32)
 
         self.path = None        # the episode's RoutePath
@@ -501,32 +501,3 @@ class DrivingEnv(_EnvBase):
         if self._obs is None or "rgb" not in self._obs:
             return None
         return self._obs["rgb"].copy()
-
-    def close(self):
-        """Ends the session and stops the env's daemon. Safe to call twice."""
-        if self._closed:
-            return
-        self._closed = True
-        self._done = True
-        if self.client is not None:
-            try:
-                self.client.close()
-            except Exception:  # noqa: BLE001
-                pass
-            self.client = None
-        if self.daemon is not None:
-            self.daemon.stop()
-            self.daemon = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
-
-    def __del__(self):
-        try:
-            self.close()
-        except Exception:  # noqa: BLE001
-            pass

@@ -20,6 +20,7 @@
 
 #include "driving/controller.h"
 #include "driving/waypoint_model.h"
+#include "flags.h"
 #include "sim4cv/client.h"
 
 namespace {
@@ -38,27 +39,11 @@ struct Options {
   bool add_camera = false;
 };
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using examples::ParseNumber;
+using examples::UsageError;
 
 volatile std::sig_atomic_t g_stop = 0;
 void OnSignal(int) { g_stop = 1; }
-
-double ParseNumber(const std::string& flag, const std::string& text, double min, double max) {
-  std::size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !(value >= min && value <= max)) {
-    throw UsageError(flag + " wants a number in [" + std::to_string(min) + ", " + std::to_string(max) + "], got '" +
-                     text + "'");
-  }
-  return value;
-}
 
 Options ParseArgs(int argc, char** argv) {
   Options o;
@@ -82,9 +67,9 @@ Options ParseArgs(int argc, char** argv) {
     } else if (flag == "--camera") {
       o.camera = value;
     } else if (flag == "--max-speed") {
-      o.max_speed = ParseNumber(flag, value, 0.1, 100);
+      o.max_speed = ParseNumber(flag, value, 0.1, 100.0);
     } else if (flag == "--steer-waypoint") {
-      o.steer_waypoint = static_cast<int>(ParseNumber(flag, value, 1, 4));
+      o.steer_waypoint = ParseNumber(flag, value, 1, 4);
     } else if (flag == "--goal") {
       if (value != "-1" && value != "0" && value != "1")
         throw UsageError("--goal wants -1, 0 or 1, got '" + value + "'");
@@ -93,7 +78,7 @@ Options ParseArgs(int argc, char** argv) {
       if (value != "left" && value != "right") throw UsageError("--lane wants left or right, got '" + value + "'");
       o.left_lane = value == "left";
     } else if (flag == "--frames-count") {
-      const double count = ParseNumber(flag, value, 0, 1e9);
+      const double count = ParseNumber(flag, value, 0.0, 1e9);
       if (count != std::floor(count)) throw UsageError("--frames-count wants a whole number, got '" + value + "'");
       o.frames_count = static_cast<long>(count);
     } else {
