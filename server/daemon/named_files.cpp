@@ -64,6 +64,20 @@ fs::path Confined(const fs::path& root, const std::string& name, const char* ext
   return root / relative;
 }
 
+// A file about to be written: an existing one only with `overwrite`, and
+// only a regular file.
+void RefuseExisting(const fs::path& path, bool overwrite, const char* request) {
+  std::error_code error;
+  if (!fs::exists(path, error)) return;
+  if (!overwrite) {
+    Fail(proto::ERROR_CODE_ALREADY_EXISTS, std::string(request) + ": " + Quoted(path.string()) +
+                                               " exists; set overwrite to replace it, or choose another name");
+  }
+  if (!fs::is_regular_file(path, error)) {
+    Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(path.string()) + " is not a regular file: choose another name");
+  }
+}
+
 // write(2) until done; false with errno set on a failure.
 bool WriteAll(int fd, const std::string& text) {
   for (std::size_t done = 0; done < text.size();) {
@@ -125,16 +139,8 @@ std::string ReadMapFile(const std::string& maps_dir, const std::string& name) {
 
 void WriteMapFile(const std::string& maps_dir, const std::string& name, const std::string& text, bool overwrite) {
   const fs::path path = Confined(Root(maps_dir, "maps folder", "--maps-dir"), name, ".map", true);
+  RefuseExisting(path, overwrite, "SaveMap");
   std::error_code error;
-  if (fs::exists(path, error)) {
-    if (!overwrite) {
-      Fail(proto::ERROR_CODE_ALREADY_EXISTS,
-           "SaveMap: " + Quoted(path.string()) + " exists; set overwrite to replace it, or choose another name");
-    }
-    if (!fs::is_regular_file(path, error)) {
-      Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(path.string()) + " is not a regular file: choose another name");
-    }
-  }
   // Beside the target, so the rename stays on one file system; the pid keeps
   // two daemons sharing a folder apart, O_EXCL a stale leftover.
   std::string hidden = path.filename().string();  // built step by step: GCC 12 warns (-Wrestrict) on "." + ...
@@ -163,16 +169,7 @@ std::string NewLogPath(const std::string& logs_dir, const std::string& name, boo
          "--logs-dir DIR (or record the whole run with --log FILE)");
   }
   const fs::path path = Confined(Root(logs_dir, "logs folder", "--logs-dir"), name, ".s4log", true);
-  std::error_code error;
-  if (fs::exists(path, error)) {
-    if (!overwrite) {
-      Fail(proto::ERROR_CODE_ALREADY_EXISTS,
-           "StartLog: " + Quoted(path.string()) + " exists; set overwrite to replace it, or choose another name");
-    }
-    if (!fs::is_regular_file(path, error)) {
-      Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(path.string()) + " is not a regular file: choose another name");
-    }
-  }
+  RefuseExisting(path, overwrite, "StartLog");
   return path.string();
 }
 
