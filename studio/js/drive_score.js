@@ -18,13 +18,13 @@ export const MAX_GAP_S = 1.0;
 
 // What to compare with (docs/driving.md, "Results"; the paper: Sim4CV, IJCV 2018).
 export const REFERENCES = [
-  { name: "paper: human drivers", mean_deviation_cm: 30.17 },
+  { name: "paper: best human driver", mean_deviation_cm: 30.17 },
   { name: "paper: network, random views", mean_deviation_cm: 7.12, within_25cm: 0.955, within_50cm: 0.9966,
     within_1m: 1.0 },
   { name: "paper: network, fixed views", mean_deviation_cm: 14.61, within_25cm: 0.8944, within_50cm: 0.968,
     within_1m: 0.9954 },
-  { name: "shipped model (waypoint 2)", mean_deviation_cm: 14.6, within_25cm: 0.9161, within_50cm: 0.9687,
-    within_1m: 0.9876 },
+  { name: "shipped model (waypoint 2)", mean_deviation_cm: 10.07, within_25cm: 0.9238, within_50cm: 0.968,
+    within_1m: 0.9933 },
 ];
 
 export class DriveScore {

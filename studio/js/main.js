@@ -122,7 +122,12 @@ class App {
       this.map.setState(this.state);
       $("frame").textContent = `frame ${this.state.frame_id || 0} · t = ${Number(this.state.sim_time || 0).toFixed(2)} s`;
       if (this.controls.selected) {
-        this.controls.select((this.state.entities || []).find((e) => e.id === this.controls.selected.id) || null);
+        // A State asked for before a Spawn was carried out lacks the new entity:
+        // the selection goes only when the world no longer holds it.
+        const id = this.controls.selected.id;
+        const now = (this.state.entities || []).find((e) => e.id === id);
+        if (now) this.controls.select(now);
+        else if (!(this.world?.entities || []).some((e) => e.id === id)) this.controls.select(null);
       }
       await new Promise((r) => setTimeout(r, Math.max(0, periodMs - (performance.now() - started))));
     }
