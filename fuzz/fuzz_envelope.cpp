@@ -9,7 +9,6 @@
 #include <cstdint>
 #include <cstring>
 
-#include "fuzz/fuzz_input.h"
 #include "fuzz/protocol_harness.h"
 #include "server/transport/tcp/message_reader.h"
 
@@ -18,18 +17,10 @@ namespace {
 using sim4cv::session::ClientProtocol;
 using sim4cv::transport::MessageReader;
 
-sim4cv::fuzz::ProtocolHarness& Harness() {
-  static auto* harness = [] {
-    sim4cv::fuzz::QuietLogs();
-    return new sim4cv::fuzz::ProtocolHarness();
-  }();
-  return *harness;
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
-  sim4cv::fuzz::ProtocolHarness& harness = Harness();
+  sim4cv::fuzz::ProtocolHarness& harness = sim4cv::fuzz::SharedHarness();
   sim4cv::fuzz::FuzzSession session(harness.context());
   MessageReader reader(harness.context().max_message_bytes);
   sim4cv::proto::Envelope request, reply;
@@ -40,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     at += piece;
     const MessageReader::Status status = reader.Advance(piece);
     if (status == MessageReader::Status::kNeedMore) continue;
-    if (status == MessageReader::Status::kTooLarge) break;  // refused: the session closes
+    if (status == MessageReader::Status::kTooLarge) break;                      // refused: the session closes
     ClientProtocol::Outcome outcome = ClientProtocol::Outcome::kReplyAndClose;  // a malformed body
     if (request.ParseFromString(reader.body())) outcome = session.protocol.Handle(request, reply);
     reader.Next();

@@ -29,14 +29,6 @@ using Kind = sim4cv::proto::Envelope::KindCase;
 constexpr std::size_t kSenders = 4;
 constexpr std::size_t kMaxDatagramBytes = 65000;  // UdpOptions' default
 
-sim4cv::fuzz::ProtocolHarness& Harness() {
-  static auto* harness = [] {
-    sim4cv::fuzz::QuietLogs();
-    return new sim4cv::fuzz::ProtocolHarness(sim4cv::proto::SIM_MODE_LOCKSTEP);
-  }();
-  return *harness;
-}
-
 sim4cv::transport::PeerAddress Address(std::size_t sender) {
   sim4cv::transport::PeerAddress address;
   auto* in = reinterpret_cast<sockaddr_in*>(&address.storage);
@@ -58,15 +50,17 @@ class Daemon {
   void Receive(std::size_t sender, const uint8_t* data, std::size_t size) {
     std::shared_ptr<UdpPeer>& peer = peers_[sender];
     if (!request_.ParseFromArray(data, static_cast<int>(size))) return;  // counted; an Error if registered
-    if (request_.has_frame_chunk()) return;                               // only the daemon sends chunks
+    if (request_.has_frame_chunk()) return;                              // only the daemon sends chunks
     if (!peer) return Stranger(sender);
     ClientProtocol::Outcome outcome;
     switch (request_.kind_case()) {
-      case Kind::KIND_NOT_SET: return;  // keep-alive
+      case Kind::KIND_NOT_SET:
+        return;  // keep-alive
       case Kind::kHello:
         if (request_.hello().protocol_version() == sim4cv::wire::kProtocolVersion) {
           reply_.Clear();
-          ClientProtocol::FillWelcome(Harness().context(), peer->client(), *reply_.mutable_welcome());
+          ClientProtocol::FillWelcome(sim4cv::fuzz::SharedHarness().context(), peer->client(),
+                                      *reply_.mutable_welcome());
           return Send();
         }
         break;
@@ -75,7 +69,8 @@ class Daemon {
       case Kind::kTrackerOutput:
         if (!peer->sequence().Accept(request_.sequence())) return;  // late or duplicated
         break;
-      default: break;
+      default:
+        break;
     }
     outcome = peer->protocol().Handle(request_, reply_);
     if (outcome == ClientProtocol::Outcome::kNoReply) return;
@@ -102,8 +97,9 @@ class Daemon {
  private:
   void Stranger(std::size_t sender) {
     if (!request_.has_hello()) return;  // NOT_HANDSHAKEN (rate-limited), or nothing for a late keep-alive
-    auto peer = std::make_shared<UdpPeer>(sim4cv::session::NewClientId(), Address(sender), Harness().context(),
-                                          wakeup_, kMaxDatagramBytes, std::chrono::steady_clock::now());
+    auto peer = std::make_shared<UdpPeer>(sim4cv::session::NewClientId(), Address(sender),
+                                          sim4cv::fuzz::SharedHarness().context(), wakeup_, kMaxDatagramBytes,
+                                          std::chrono::steady_clock::now());
     peer->Start();
     peer->protocol().Handle(request_, reply_);
     Send();
@@ -134,15 +130,15 @@ class Daemon {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
-  Harness();
+  sim4cv::fuzz::SharedHarness();  // built, and the logs quieted, before the peers below log
   Daemon daemon;
   for (std::string_view record : sim4cv::fuzz::SplitRecords(data, size)) {
     if (record.empty()) continue;
     const auto* bytes = reinterpret_cast<const uint8_t*>(record.data());
     daemon.Receive(bytes[0] % kSenders, bytes + 1, record.size() - 1);
-    Harness().DrainCommands();
+    sim4cv::fuzz::SharedHarness().DrainCommands();
     daemon.SendOffered();
   }
-  Harness().DrainCommands();
+  sim4cv::fuzz::SharedHarness().DrainCommands();
   return 0;
 }

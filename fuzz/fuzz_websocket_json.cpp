@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <string_view>
 
-#include "fuzz/fuzz_input.h"
 #include "fuzz/protocol_harness.h"
 #include "server/transport/http/json_envelope.h"
 
@@ -16,18 +15,10 @@ namespace {
 
 using sim4cv::session::ClientProtocol;
 
-sim4cv::fuzz::ProtocolHarness& Harness() {
-  static auto* harness = [] {
-    sim4cv::fuzz::QuietLogs();
-    return new sim4cv::fuzz::ProtocolHarness();
-  }();
-  return *harness;
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
-  sim4cv::fuzz::ProtocolHarness& harness = Harness();
+  sim4cv::fuzz::ProtocolHarness& harness = sim4cv::fuzz::SharedHarness();
   sim4cv::fuzz::FuzzSession session(harness.context());
   sim4cv::proto::Envelope request, reply;
   std::string reply_json;

@@ -1,5 +1,6 @@
 #include "fuzz/protocol_harness.h"
 
+#include "fuzz/fuzz_input.h"
 #include "protocol/framing.h"
 #include "server/common/limits.h"
 
@@ -19,8 +20,8 @@ proto::Welcome MakeWelcome(proto::SimMode mode) {
 }  // namespace
 
 ProtocolHarness::ProtocolHarness(proto::SimMode mode)
-    : context_{scene_,          mode,     MakeWelcome(mode), world_, commands_, latest_state_,
-               limits::kDefaultMaxMessageBytes, counters_} {
+    : context_{scene_,   mode, MakeWelcome(mode), world_, commands_, latest_state_, limits::kDefaultMaxMessageBytes,
+               counters_} {
   // What the sim thread publishes for the default scene: its entities and cameras.
   proto::WorldInfo world;
   world.set_scene_name("default");
@@ -43,5 +44,13 @@ FuzzSession::FuzzSession(const session::ServerContext& context)
     : protocol(session::NewClientId(), context, link, &mailbox) {}
 
 FuzzSession::~FuzzSession() { protocol.Disconnect(); }
+
+ProtocolHarness& SharedHarness() {
+  static auto* harness = [] {
+    QuietLogs();
+    return new ProtocolHarness(proto::SIM_MODE_LOCKSTEP);
+  }();
+  return *harness;
+}
 
 }  // namespace sim4cv::fuzz

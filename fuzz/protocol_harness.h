@@ -34,6 +34,10 @@ class ProtocolHarness {
   std::vector<session::Command> drained_;
 };
 
+// The lockstep harness of a protocol fuzzer's process, built on first use
+// with the logs quieted to warnings (every input would log its refusals).
+ProtocolHarness& SharedHarness();
+
 // A link that keeps what the sim thread offers, as a transport session would
 // queue it, until the next input.
 class RecordingLink : public session::ClientLink {
