@@ -10,6 +10,10 @@
 
 namespace sim4cv::daemon {
 
+// Refuses (ConfigureError INVALID_ARGUMENT, the parser's message prefixed
+// with `field`) a map text the daemon's parser does not accept.
+void CheckMapText(const std::string& text, const std::string& field);
+
 // The canonical text of a map text that parses, or ConfigureError
 // INVALID_ARGUMENT with the parser's message ("map line N 'LINE': ..."),
 // prefixed with `field`.

@@ -186,7 +186,7 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       SIM4CV_DEMAND(false);  // the sim thread's: it owns the log (SimThread::ConfigureLog)
       break;
     case Kind::kSaveMap:
-      CanonicalMapText(request.save_map().text(), "SaveMap.text (not saved; the file on disk is unchanged)");
+      CheckMapText(request.save_map().text(), "SaveMap.text (not saved; the file on disk is unchanged)");
       WriteMapFile(config_.maps_dir, request.save_map().name(), request.save_map().text(),
                    request.save_map().overwrite());
       change.world_changed = false;
