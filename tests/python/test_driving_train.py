@@ -133,3 +133,37 @@ def test_a_goal_model_starts_from_a_lane_model_with_the_same_outputs(dataset, tm
     with pytest.raises(dt.TrainError, match="goal=True, not 90x160 goal=False"):
         dt.train(str(dataset), str(dataset), str(tmp_path / "back"), epochs=1, downscale=2,
                  init=str(tmp_path / "goal" / "model.pt"), log=lambda *a: None)
+
+
+def test_kept_epochs_average_into_one_model_with_the_mean_weights(dataset, tmp_path):
+    from sim4cv import driving_average as da
+    out = tmp_path / "run"
+    dt.train(str(dataset), str(dataset), str(out), epochs=2, batch=8, lr=1e-3, downscale=2, threads=2,
+             goal=True, keep_epochs=True, log=lambda *a: None)
+    epochs = [str(out / "epochs" / "01.pt"), str(out / "epochs" / "02.pt")]
+    one, two = (dt.load_model(p) for p in epochs)
+    assert not torch.equal(one.fc2.weight, two.fc2.weight)  # lr 1e-3: the epochs differ
+    meta = da.average(epochs, str(tmp_path / "avg"), log=lambda *a: None)
+    assert meta["models"] == epochs and meta["goal"] is True
+    avg = dt.load_model(str(tmp_path / "avg" / "model.pt"))
+    for name, value in avg.state_dict().items():
+        assert torch.allclose(value, (one.state_dict()[name] + two.state_dict()[name]) / 2)
+    image = torch.rand(1, 3, 90, 160) * 255
+    run = dn.load_onnx_with_opencv(str(tmp_path / "avg" / "model.onnx"), use_goal=True)
+    with torch.no_grad():
+        want = avg(image, torch.tensor([[1.0]])).numpy().reshape(-1)
+    assert np.allclose(run(image[0].numpy().transpose(1, 2, 0), 1.0), want, atol=1e-3)
+
+    # refusals: one model, a file that is no model, another architecture
+    with pytest.raises(da.AverageError, match="at least 2 models, got 1"):
+        da.average(epochs[:1], str(tmp_path / "x"), log=lambda *a: None)
+    (tmp_path / "junk.pt").write_bytes(b"not a model")
+    with pytest.raises(da.AverageError, match="junk.pt: not a model.pt"):
+        da.average([epochs[0], str(tmp_path / "junk.pt")], str(tmp_path / "x"), log=lambda *a: None)
+    dt.train(str(dataset), str(dataset), str(tmp_path / "lane"), epochs=1, batch=8, downscale=2, threads=2,
+             log=lambda *a: None)
+    with pytest.raises(da.AverageError, match="90x160 goal=True, .* has 90x160 goal=False"):
+        da.average([epochs[0], str(tmp_path / "lane" / "model.pt")], str(tmp_path / "x"), log=lambda *a: None)
+    assert subprocess.run([sys.executable, "-m", "sim4cv.driving", "average", "--models", epochs[0],
+                           "--out", str(tmp_path / "x")], cwd=os.path.join(REPO_ROOT, "clients", "python"),
+                          capture_output=True, text=True).stderr.startswith("error: average needs at least 2")

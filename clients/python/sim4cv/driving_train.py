@@ -4,7 +4,7 @@ on datasets written by sim4cv.driving_dataset.
     python3 -m sim4cv.driving_train --train DIR --val DIR --out OUT \\
         [--epochs N] [--batch 32] [--lr 5e-5] [--patience 5] [--downscale 2] \\
         [--goal] [--max-samples N] [--threads N] [--max-minutes M] [--force]
-        [--init MODEL.pt] [--junction-weight K]
+        [--init MODEL.pt] [--junction-weight K] [--keep-epochs]
 
 L2 (MSE) loss on the 8 offsets v1 h1 ... v4 h4, Adam, the validation loss
 after every epoch, early stopping on it (the best state is kept). Writes
@@ -158,7 +158,7 @@ def _check_out(out: str, settings: dict, force: bool) -> None:
 def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
           patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
           threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, init: str = "",
-          junction_weight: float = 1.0, log=print) -> dict:
+          junction_weight: float = 1.0, keep_epochs: bool = False, log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
     if epochs < 1 or batch < 1 or lr <= 0:
@@ -230,6 +230,8 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
         entry = dict(epoch=epoch, train_loss=train_loss, val_loss=val_loss, seconds=seconds,
                      train_samples_per_s=n / train_seconds if train_seconds > 0 else None)
         history.append(entry)
+        if keep_epochs:  # every epoch's weights, for choosing by closed loop or averaging (driving_average)
+            _save(os.path.join(out, "epochs", "%02d.pt" % epoch), model.state_dict(), settings, epoch)
         improved = val_loss < best
         if improved:
             best, best_epoch, best_state, waited = val_loss, epoch, copy.deepcopy(model.state_dict()), 0
@@ -260,8 +262,7 @@ def _write(out, model, best_state, settings, history, best_epoch, best, epochs, 
     snapshot = copy.deepcopy(model)
     snapshot.load_state_dict(best_state)
     snapshot.eval()
-    torch.save(dict(state_dict=best_state, settings=settings, best_epoch=best_epoch, targets=TARGETS),
-               os.path.join(out, "model.pt"))
+    _save(os.path.join(out, "model.pt"), best_state, settings, best_epoch)
     export_onnx(snapshot, os.path.join(out, "model.onnx"), settings["height"], settings["width"])
     meta = dict(settings=settings, epochs=history, best_epoch=best_epoch, best_val_loss=best, finished=finished,
                 stopped_early=finished and len(history) < epochs,
@@ -270,6 +271,12 @@ def _write(out, model, best_state, settings, history, best_epoch, best, epochs, 
     with open(os.path.join(out, "training.json"), "w") as f:
         json.dump(meta, f, indent=2)
     return meta
+
+
+def _save(path: str, state, settings: dict, epoch: int) -> None:
+    """A model.pt: the weights with the settings load_model needs."""
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    torch.save(dict(state_dict=state, settings=settings, best_epoch=epoch, targets=TARGETS), path)
 
 
 def load_model(path: str) -> WaypointNet:
@@ -301,12 +308,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
     p.add_argument("--junction-weight", type=float, default=1.0,
                    help="draw samples at junctions (relabel's junction column) this many times as often")
+    p.add_argument("--keep-epochs", action="store_true",
+                   help="also write every epoch's weights to OUT/epochs/NN.pt (to choose by closed loop or average)")
     a = p.parse_args(argv)
     try:
         train(a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience,
               downscale=a.downscale, goal=a.goal, max_samples=a.max_samples, threads=a.threads,
               force=a.force, seed=a.seed, max_minutes=a.max_minutes, init=a.init,
-              junction_weight=a.junction_weight, log=lambda m: print(m, flush=True))
+              junction_weight=a.junction_weight, keep_epochs=a.keep_epochs, log=lambda m: print(m, flush=True))
     except TrainError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
