@@ -183,3 +183,19 @@ def test_tiny_generation_resume_and_refusals(tmp_path):
         ro.chmod(0o500)
         with pytest.raises(dd.DatasetError, match="not writable"):
             _generate(ro)
+
+
+def test_narrow_ranges_render_views_near_the_lane(tmp_path):
+    # --offset-range 0.5 --yaw-range 5: views where a driving model is in closed loop
+    meta = _generate(tmp_path / "near", offset_range=0.5, yaw_range=5.0)
+    assert meta["settings"]["augmentation"]["random_offset_m"] == 0.5
+    assert meta["settings"]["augmentation"]["random_yaw_deg"] == 5.0
+    with open(tmp_path / "near" / "labels.csv") as f:
+        rows = [r for r in csv.DictReader(f) if float(r["offset_side_m"]) or float(r["offset_yaw_deg"])]
+    assert len(rows) == 20
+    assert all(abs(float(r["offset_side_m"])) <= 0.5 and abs(float(r["offset_yaw_deg"])) <= 5.0 for r in rows)
+    with pytest.raises(dd.DatasetError, match=r"--offset-range 5 and --yaw-range 30: within \[0, 4\] m"):
+        _generate(tmp_path / "wide", offset_range=5.0)
+    # a dataset of other ranges is another dataset
+    with pytest.raises(dd.DatasetError, match="other settings"):
+        _generate(tmp_path / "near", offset_range=0.25, yaw_range=5.0)

@@ -333,8 +333,10 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
                     waypoints = geometric
                     counts["junction_turns"] += 1
                 goal = int(goal_fn(route, u, counts["samples"])) if goal_fn is not None else 0
+                aug = settings["augmentation"]
                 for vx, vy, vyaw, off_m, off_deg in dl.all_views(x, y, yaw, settings["views"], rng,
-                                                                 settings["random_views"]):
+                                                                 settings["random_views"], aug["random_offset_m"],
+                                                                 aug["random_yaw_deg"]):
                     client.set_camera_pose(CAMERA, vx + cam["forward_m"] * math.cos(vyaw),
                                            vy + cam["forward_m"] * math.sin(vyaw), camera_z, math.degrees(vyaw),
                                            cam["pitch_down_deg"])
@@ -362,14 +364,20 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
              random_views: int = dl.DEFAULT_RANDOM_VIEWS, straight_step: Optional[float] = None,
              turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, conditions: str = "",
              randomize: int = 0, obstacles: int = 0, log=print, scenes_dir: Optional[str] = None,
-             goals=None, extra_settings: Optional[dict] = None) -> dict:
+             goals=None, extra_settings: Optional[dict] = None, offset_range: float = dl.RANDOM_OFFSET_M,
+             yaw_range: float = dl.RANDOM_YAW_DEG) -> dict:
     """Generates (or resumes) the dataset in `out`; returns dataset.json's content.
     scenes_dir: where the train/val/test sets are (default scenes/driving);
     goals(map_path) -> goal_fn (generate_map's) whose summary() goes into the
     map's counts as "goals"; extra_settings: recorded with the settings (and
-    compared on resume). sim4cv.driving_guided uses the three."""
+    compared on resume). sim4cv.driving_guided uses the three. offset_range,
+    yaw_range: the random views' ranges (+-metres, +-degrees); narrow ones
+    (e.g. 0.5 m, 5 deg) render the states a driving model visits near the lane."""
     if views not in dl.VIEW_MODES:
         raise DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
+    if not (0 <= offset_range <= dl.RANDOM_OFFSET_M and 0 <= yaw_range <= dl.RANDOM_YAW_DEG):
+        raise DatasetError("--offset-range %g and --yaw-range %g: within [0, %g] m and [0, %g] degrees"
+                           % (offset_range, yaw_range, dl.RANDOM_OFFSET_M, dl.RANDOM_YAW_DEG))
     resolved = resolve_maps(maps, surroundings, scenes_dir)
     settings = {
         "format": FORMAT_VERSION, "maps": [p for p, _ in resolved], "surroundings": list(surroundings),
@@ -378,7 +386,7 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
         "conditions": conditions, "randomize": randomize, "obstacles": obstacles,
         "camera": dict(CAMERA_SETTINGS, rendered_by=CAMERA),
         "waypoints": {"count": WAYPOINT_COUNT, "step_m": WAYPOINT_STEP_M},
-        "augmentation": {"random_offset_m": dl.RANDOM_OFFSET_M, "random_yaw_deg": dl.RANDOM_YAW_DEG,
+        "augmentation": {"random_offset_m": float(offset_range), "random_yaw_deg": float(yaw_range),
                          "fixed_offsets_m": list(dl.FIXED_OFFSETS_M), "fixed_yaws_deg": list(dl.FIXED_YAWS_DEG)},
         "turn": {"lookahead_m": TURN_LOOKAHEAD_M, "threshold_deg": TURN_THRESHOLD_DEG},
     }
@@ -446,6 +454,10 @@ def main(argv=None) -> int:
     g.add_argument("--obstacles", type=int, default=0,
                    help="cars parked in the right lane per route, on straights; the labels pass them in the "
                         "left lane (default 0)")
+    g.add_argument("--offset-range", type=float, default=dl.RANDOM_OFFSET_M,
+                   help="random views shift sideways within +- this many metres (default %(default)s)")
+    g.add_argument("--yaw-range", type=float, default=dl.RANDOM_YAW_DEG,
+                   help="random views turn within +- this many degrees (default %(default)s)")
     args = parser.parse_args(argv)
     surroundings = [s for s in args.surroundings.split(",") if s]
     for s in surroundings:
@@ -457,7 +469,7 @@ def main(argv=None) -> int:
     try:
         generate(args.maps, surroundings, args.out, args.views, args.random_views, args.straight_step,
                  args.turn_step, args.max_samples, args.seed, args.conditions, args.randomize,
-                 args.obstacles)
+                 args.obstacles, offset_range=args.offset_range, yaw_range=args.yaw_range)
     except DatasetError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -88,6 +88,7 @@ def augment_poses(x: float, y: float, yaw: float, mode: str, rng=None, n: int = 
     return [offset_pose(x, y, yaw, o, a) + (o, a) for o, a in combos]
 
 
-def all_views(x: float, y: float, yaw: float, mode: str, rng=None, n: int = DEFAULT_RANDOM_VIEWS):
+def all_views(x: float, y: float, yaw: float, mode: str, rng=None, n: int = DEFAULT_RANDOM_VIEWS,
+              max_offset_m: float = RANDOM_OFFSET_M, max_yaw_deg: float = RANDOM_YAW_DEG):
     """The original view (offsets 0, 0) followed by augment_poses()."""
-    return [(x, y, yaw, 0.0, 0.0)] + augment_poses(x, y, yaw, mode, rng, n)
+    return [(x, y, yaw, 0.0, 0.0)] + augment_poses(x, y, yaw, mode, rng, n, max_offset_m, max_yaw_deg)
