@@ -9,6 +9,7 @@
     python3 -m sim4cv.driving human --map MAP --out DIR   (keyboard driving, scored: sim4cv.driving_human)
     python3 -m sim4cv.driving relabel --dataset DIR   (goals at junctions: sim4cv.driving_relabel)
     python3 -m sim4cv.driving compare --out DIR   (no / fixed / random views: sim4cv.driving_compare)
+    python3 -m sim4cv.driving dagger --model M --maps train --out DIR   (the states M drives into: sim4cv.driving_dagger)
     python3 -m sim4cv.driving average --models A.pt B.pt ... --out DIR   (weight averaging: sim4cv.driving_average)
 """
 
@@ -132,7 +133,7 @@ def human_main(argv: List[str]) -> int:
 
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    commands = ("generate", "train", "evaluate", "drive", "compare", "human", "relabel", "average")
+    commands = ("generate", "train", "evaluate", "drive", "compare", "human", "relabel", "average", "dagger")
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2
@@ -146,6 +147,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         return driving_relabel.main(rest)
     if command == "human":
         return human_main(rest)
+    if command == "dagger":
+        from . import driving_dagger
+        return driving_dagger.main(rest)
     if command == "average":
         from . import driving_average
         return driving_average.main(rest)

@@ -261,10 +261,14 @@ def _rebuild_labels(out: str, meta: dict) -> None:
 # ---------------------------------------------------------------------------
 # Generating one map
 
-def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, goal_fn=None) -> dict:
+def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, goal_fn=None, poses=None) -> dict:
     """Renders and labels one map into out/images/<name>/ and out/parts/<name>.csv.
     goal_fn(route, u, sample) -> -1|0|1, if given, sets the goal column of each lane
-    pose's images (guided driving, sim4cv.driving_guided); without it the goal is 0."""
+    pose's images (guided driving, sim4cv.driving_guided); without it the goal is 0.
+    poses: {route: [(u, views), ...]}, if given, renders exactly these views
+    (view_x, view_y, view_yaw, sideways_m, yaw_offset_deg), each labelled with the
+    waypoints of the lane pose at u, instead of the lane samples and their
+    augmented views (the states a model drove into: sim4cv.driving_dagger)."""
     import cv2
     import sim4cv
     from .daemon import OwnDaemon
@@ -310,7 +314,9 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
             for ox, oy, oyaw in ideal.obstacle_poses():
                 client.spawn("car", dob.OBSTACLE_NAME % counts["obstacles"], ox, oy, 0.0, math.degrees(oyaw))
                 counts["obstacles"] += 1
-            for u in lane_samples(lane, straight_step, turn_step):
+            planned = poses.get(route, []) if poses is not None else (
+                (u, None) for u in lane_samples(lane, straight_step, turn_step))
+            for u, views in planned:
                 if settings["max_samples"] and counts["samples"] >= settings["max_samples"]:
                     break
                 x, y, yaw = ideal.point(u)
@@ -334,9 +340,10 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
                     counts["junction_turns"] += 1
                 goal = int(goal_fn(route, u, counts["samples"])) if goal_fn is not None else 0
                 aug = settings["augmentation"]
-                for vx, vy, vyaw, off_m, off_deg in dl.all_views(x, y, yaw, settings["views"], rng,
-                                                                 settings["random_views"], aug["random_offset_m"],
-                                                                 aug["random_yaw_deg"]):
+                if views is None:
+                    views = dl.all_views(x, y, yaw, settings["views"], rng, settings["random_views"],
+                                         aug["random_offset_m"], aug["random_yaw_deg"])
+                for vx, vy, vyaw, off_m, off_deg in views:
                     client.set_camera_pose(CAMERA, vx + cam["forward_m"] * math.cos(vyaw),
                                            vy + cam["forward_m"] * math.sin(vyaw), camera_z, math.degrees(vyaw),
                                            cam["pitch_down_deg"])
@@ -365,14 +372,15 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
              turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, conditions: str = "",
              randomize: int = 0, obstacles: int = 0, log=print, scenes_dir: Optional[str] = None,
              goals=None, extra_settings: Optional[dict] = None, offset_range: float = dl.RANDOM_OFFSET_M,
-             yaw_range: float = dl.RANDOM_YAW_DEG) -> dict:
+             yaw_range: float = dl.RANDOM_YAW_DEG, poses=None) -> dict:
     """Generates (or resumes) the dataset in `out`; returns dataset.json's content.
     scenes_dir: where the train/val/test sets are (default scenes/driving);
     goals(map_path) -> goal_fn (generate_map's) whose summary() goes into the
     map's counts as "goals"; extra_settings: recorded with the settings (and
     compared on resume). sim4cv.driving_guided uses the three. offset_range,
     yaw_range: the random views' ranges (+-metres, +-degrees); narrow ones
-    (e.g. 0.5 m, 5 deg) render the states a driving model visits near the lane."""
+    (e.g. 0.5 m, 5 deg) render the states a driving model visits near the lane.
+    poses(map_path) -> generate_map's poses: the views to render instead."""
     if views not in dl.VIEW_MODES:
         raise DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
     if not (0 <= offset_range <= dl.RANDOM_OFFSET_M and 0 <= yaw_range <= dl.RANDOM_YAW_DEG):
@@ -406,7 +414,8 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
         meta["maps"][name] = {"complete": False}
         _write_json(os.path.join(out, "dataset.json"), meta)
         goal_fn = goals(path) if goals else None
-        meta["maps"][name] = generate_map(path, map_set, out, settings, log, goal_fn=goal_fn)
+        meta["maps"][name] = generate_map(path, map_set, out, settings, log, goal_fn=goal_fn,
+                                          poses=poses(path) if poses else None)
         if goal_fn is not None:
             meta["maps"][name]["goals"] = goal_fn.summary()
         made += meta["maps"][name]["images"]

@@ -35,6 +35,7 @@ EGO, EGO_CAMERA = "ego", "ego_cam"
 OFF_ROAD_M = 4.0          # beyond the road's right edge or into the far side of the other lane
 DEFAULT_SPEED = 8.0       # m/s, the controller's speed cap
 TIME_MARGIN_S = 30.0      # a run may take lap / (speed / 2) + this before it is stopped
+TAKEBACK_M = 0.2          # drive_route's takeover: the policy drives again once this close to the ideal path
 
 
 class EvalError(RuntimeError):
@@ -141,9 +142,12 @@ def _load_torch(path: str):
 # One route
 
 def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: float, log=print,
-                obstacles: int = 0, seed: int = 0, steer_waypoint: int = 1):
+                obstacles: int = 0, seed: int = 0, steer_waypoint: int = 1, takeover_m: float = 0.0):
     """Drives one lap of `route` under `policy` (with `obstacles` parked cars
-    to pass, placed as the dataset places them); returns (run dict, rows, deviations)."""
+    to pass, placed as the dataset places them); returns (run dict, rows, deviations).
+    takeover_m > 0: the reference policy drives from that far off the ideal
+    path until the car is back within TAKEBACK_M (collecting a policy's
+    mistakes and the recoveries from them: sim4cv.driving_dagger)."""
     lane = RoutePath(info, route)
     # A policy driving the left lane (the mirror trick) is scored against the left lane's centre.
     offset = dob.LANE_SHIFT_M if getattr(policy, "lane", "right") == "left" else 0.0
@@ -169,6 +173,7 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     frame = client.step_and_receive(timeout=30.0)
     t0 = frame.sim_time
     infer_s = 0.0
+    expert, taking_over, takeovers, expert_frames = (ReferencePolicy() if takeover_m > 0 else None), False, 0, 0
     while True:
         x, y, yaw, car_speed = car_pose(frame, ego)
         lane_deviation = progress.update(x, y)
@@ -186,8 +191,15 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
             break
         if goals is not None:  # the route's way at the junction ahead, as a navigation system tells it
             policy.goal = goals.goal(progress.u)
+        if expert is not None:
+            if not taking_over and abs(deviation) > takeover_m:
+                taking_over, takeovers = True, takeovers + 1
+            elif taking_over and abs(deviation) < TAKEBACK_M:
+                taking_over = False
+            expert_frames += taking_over
+        driver = expert if taking_over else policy
         started = time.perf_counter()
-        w = policy.waypoints(frame.image("rgb"), (x, y, yaw), progress)
+        w = driver.waypoints(frame.image("rgb"), (x, y, yaw), progress)
         infer_s += time.perf_counter() - started
         steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed,
                                                                steer_waypoint=steer_waypoint)
@@ -199,6 +211,8 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     run = dm.score(deviations, min(progress.u, lap), collisions.count)
     run.update(completed=completed, left_road=off_road, route=route, lap_m=round(lap, 2), obstacles=len(parked),
                sim_seconds=round(rows[-1][0], 3), policy_ms=round(1000.0 * infer_s / max(len(rows), 1), 3))
+    if expert is not None:
+        run.update(takeovers=takeovers, expert_frames=expert_frames)
     log("  route %s: %s, %.0f m, mean deviation %.1f cm, within 25 cm %.1f%%, departures %d, collisions %d"
         % (route, "completed" if completed else ("left the road" if off_road else "timed out"), run["distance_m"],
            run["mean_deviation_cm"] or 0.0, 100.0 * (run["within_25cm"] or 0.0), run["lane_departures"],
@@ -230,9 +244,9 @@ ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering"
 
 def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, speed: float = DEFAULT_SPEED,
              conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "", obstacles: int = 0,
-             seed: int = 0, steer_waypoint: int = 1) -> dict:
+             seed: int = 0, steer_waypoint: int = 1, takeover_m: float = 0.0) -> dict:
     """Drives every route of every map; writes out/driving.json, out/runs/*.csv
-    and the plots; returns driving.json's content."""
+    and the plots; returns driving.json's content. takeover_m: drive_route's."""
     import sim4cv
     from .daemon import OwnDaemon
     from . import driving_plots
@@ -243,7 +257,7 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
                            "maps": [p for p, _ in resolved], "speed_m_s": speed, "conditions": conditions or "clear_noon",
                            "frame_hz": frame_hz, "off_road_m": OFF_ROAD_M,
                            "lane_departure_m": dm.LANE_DEPARTURE_M, "obstacles": obstacles, "seed": seed,
-                           "steer_waypoint": steer_waypoint},
+                           "steer_waypoint": steer_waypoint, "takeover_m": takeover_m},
               "maps": {}}
     pooled: Dict[str, List] = {"overall": [], "desert": [], "urban": []}
     trajectories = {}
@@ -265,7 +279,7 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
                     if entity.name in ("car", "uav"):  # the map's own car and the UAV filming it
                         client.remove(entity.id)
                 run, rows, deviations, ideal = drive_route(client, info, route, policy, speed, frame_hz, log,
-                                                           obstacles, seed, steer_waypoint)
+                                                           obstacles, seed, steer_waypoint, takeover_m)
             runs[route] = run
             map_devs.append(deviations)
             _write_rows(os.path.join(out, "runs", "%s_%s.csv" % (name, route)), rows)
