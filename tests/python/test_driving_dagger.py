@@ -80,3 +80,16 @@ def test_a_policy_that_pulls_left_is_caught_and_its_states_become_a_dataset(tmp_
     with pytest.raises(dd.DatasetError, match="--takeover 0.1: more than 0.2 m"):
         dg.collect(PullsLeft(), [TEST_MAP], ["desert"], str(tmp_path / "x"), takeover_m=0.1, every_m=2.0,
                    min_offset_m=0.1, min_yaw_deg=2.0, log=lambda *a: None)
+
+
+def test_bad_settings_and_an_unreadable_dataset_are_refused_before_driving(tmp_path):
+    with pytest.raises(dd.DatasetError, match="--every must be positive, got 0"):
+        dg.collect(PullsLeft(), [TEST_MAP], ["desert"], str(tmp_path / "a"), takeover_m=1.0, every_m=0.0,
+                   min_offset_m=0.1, min_yaw_deg=2.0, log=lambda *a: None)
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "dataset.json").write_text("{not json")
+    with pytest.raises(dd.DatasetError, match=r"dataset.json is unreadable .*refusing to overwrite it"):
+        dg.collect(PullsLeft(), [TEST_MAP], ["desert"], str(tmp_path / "b"), takeover_m=1.0, every_m=2.0,
+                   min_offset_m=0.1, min_yaw_deg=2.0, log=lambda *a: None)
+    assert (tmp_path / "b" / "dataset.json").read_text() == "{not json"
+    assert not (tmp_path / "b" / "drives" / "driving.json").exists()
