@@ -49,7 +49,7 @@ def test_spaces_and_bad_settings_without_a_daemon():
         de.DrivingEnv(maps=[DESERT], camera={"zoom": 2})
     with pytest.raises(ValueError, match="unknown conditions preset 'snow'"):
         de.DrivingEnv(maps=[DESERT], conditions="snow")
-    with pytest.raises(de.DrivingEnvError, match="neither train, val, test nor a map file"):
+    with pytest.raises(de.DrivingEnvError, match="neither train, val, test, extra nor a map file"):
         de.DrivingEnv(maps=["nowhere.map"])
 
 

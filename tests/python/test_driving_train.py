@@ -61,32 +61,41 @@ def test_train_two_epochs_and_export(dataset, tmp_path):
         dt.train(str(dataset), str(dataset), str(out), epochs=2, batch=8, lr=1e-3, log=lambda *a: None)
 
 
-def test_junction_weight_draws_junction_samples_more_often(dataset, tmp_path):
+def test_junction_and_obstacle_weights_draw_flagged_samples_more_often(dataset, tmp_path):
     with pytest.raises(dt.TrainError, match="junction column of `relabel`"):
         dt.train(str(dataset), str(dataset), str(tmp_path / "m"), epochs=1, junction_weight=5.0, log=lambda *a: None)
+    with pytest.raises(dt.TrainError, match="obstacle column of `relabel`"):
+        dt.train(str(dataset), str(dataset), str(tmp_path / "m"), epochs=1, obstacle_weight=5.0, log=lambda *a: None)
     relabelled = tmp_path / "relabelled"
     relabelled.mkdir()
     with open(dataset / "labels.csv") as f:
         lines = f.read().splitlines()
-    # the first sample's views marked as at a junction
-    rows = [line + ("," + ("1" if line.split(",")[4] == "0" else "0") if i else ",junction")
+    # the first sample's views marked as at a junction, the second's as passing an obstacle
+    rows = [line + (",%d,%d" % (line.split(",")[4] == "0", line.split(",")[4] == "1") if i else ",junction,obstacle")
             for i, line in enumerate(lines)]
     (relabelled / "labels.csv").write_text("\n".join(rows) + "\n")
     os.symlink(dataset / "images", relabelled / "images")
     parts = [dt.DrivingDataset(str(relabelled))]
-    junction = parts[0].junction
-    assert 0 < junction.sum() < len(junction)
-    draws = dt._order(parts, [str(relabelled)], 50.0, torch.Generator().manual_seed(0))["sampler"]
-    drawn = np.array(list(draws))
-    assert len(drawn) == len(junction)
-    share = junction[drawn].mean()
-    want = 50.0 * junction.sum() / (50.0 * junction.sum() + (~junction).sum())
-    assert abs(share - want) < 0.35, (share, want)
+    junction, obstacle = parts[0].flags["junction"], parts[0].flags["obstacle"]
+    assert 0 < junction.sum() < len(junction) and 0 < obstacle.sum() < len(obstacle)
+    assert not np.any(junction & obstacle)
+    assert dt._order(parts, [str(relabelled)], {"junction": 1.0, "obstacle": 1.0}, None) == dict(shuffle=True)
+    for kj, ko in ((50.0, 1.0), (1.0, 50.0), (20.0, 40.0)):
+        draws = dt._order(parts, [str(relabelled)], {"junction": kj, "obstacle": ko},
+                          torch.Generator().manual_seed(0))["sampler"]
+        drawn = np.array(list(draws))
+        assert len(drawn) == len(junction)
+        total = kj * junction.sum() + ko * obstacle.sum() + (~junction & ~obstacle).sum()
+        for flags, k in ((junction, kj), (obstacle, ko)):
+            share, want = flags[drawn].mean(), k * flags.sum() / total
+            assert abs(share - want) < 0.35, (kj, ko, share, want)
     meta = dt.train(str(relabelled), str(relabelled), str(tmp_path / "w"), epochs=1, batch=8, junction_weight=50.0,
-                    log=lambda *a: None)
-    assert meta["settings"]["junction_weight"] == 50.0
-    with pytest.raises(dt.TrainError, match="must be >= 1"):
+                    obstacle_weight=3.0, log=lambda *a: None)
+    assert meta["settings"]["junction_weight"] == 50.0 and meta["settings"]["obstacle_weight"] == 3.0
+    with pytest.raises(dt.TrainError, match="--junction-weight must be >= 1"):
         dt.train(str(relabelled), str(relabelled), str(tmp_path / "x"), junction_weight=0.5, log=lambda *a: None)
+    with pytest.raises(dt.TrainError, match="--obstacle-weight must be >= 1"):
+        dt.train(str(relabelled), str(relabelled), str(tmp_path / "x"), obstacle_weight=0.0, log=lambda *a: None)
 
 
 def test_refusals(dataset, tmp_path):

@@ -123,7 +123,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     import argparse
     p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving dagger", description=__doc__.split("\n\n")[0])
     p.add_argument("--model", required=True, help="model.onnx or model.pt of a --goal model (or a lane model)")
-    p.add_argument("--maps", nargs="+", default=["train"], help="train, val, test and/or map files")
+    p.add_argument("--maps", nargs="+", default=["train"], help="train, val, test, extra and/or map files")
     p.add_argument("--surroundings", default="desert,urban")
     p.add_argument("--out", required=True, help="the dataset folder")
     p.add_argument("--takeover", type=float, default=DEFAULT_TAKEOVER_M,

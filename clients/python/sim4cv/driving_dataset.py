@@ -44,7 +44,7 @@ TURN_LOOKAHEAD_M = 2.0
 TURN_THRESHOLD_DEG = 3.0
 LANE_OFFSET_M = 2.0  # lane centre to the right of the road centre line (docs/maps.md)
 EVAL_STEP_M = 2.0    # default step of the val and test sets
-SETS = ("train", "val", "test")
+SETS = ("train", "val", "test", "extra")  # extra: maps only DAgger drives (scenes/driving/generate.sh)
 FORMAT_VERSION = 1
 COLUMNS = (["image", "map", "surroundings", "route", "sample", "view_x", "view_y", "view_yaw_deg",
             "offset_side_m", "offset_yaw_deg"]
@@ -193,7 +193,7 @@ def resolve_maps(specs: Sequence[str], surroundings: Sequence[str], scenes_dir: 
             out += [(os.path.abspath(p), spec) for p in sorted(found)]
         else:
             if not os.path.isfile(spec):
-                raise DatasetError("--maps %s: neither train, val, test nor a map file" % spec)
+                raise DatasetError("--maps %s: neither train, val, test, extra nor a map file" % spec)
             parent = os.path.basename(os.path.dirname(os.path.abspath(spec)))
             out.append((os.path.abspath(spec), parent if parent in SETS else ""))
     return out
@@ -329,8 +329,7 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
                     raise DatasetError("%s route %r at %.1f m: the lane geometry is %.2f m off the daemon's lane"
                                        % (name, route, u, road.distance))
                 queried = [(p.position.x, p.position.y) for p in road.ahead]
-                if any(dob.shift(u + WAYPOINT_STEP_M * k, ideal.obstacles, lane)[0] > 0
-                       for k in range(WAYPOINT_COUNT + 1)):
+                if dob.passing(u, ideal.obstacles, lane, WAYPOINT_STEP_M, WAYPOINT_COUNT):
                     waypoints = geometric  # passing an obstacle: off the daemon's lane on purpose
                 elif len(queried) == WAYPOINT_COUNT and all(
                         math.hypot(a[0] - b[0], a[1] - b[1]) < 0.05 for a, b in zip(queried, geometric)):

@@ -83,6 +83,13 @@ def shift(u: float, obstacles: Sequence[float], path) -> Tuple[float, float]:
     return best, slope
 
 
+def passing(u: float, obstacles: Sequence[float], path, step: float, count: int) -> bool:
+    """Whether the ideal path at u or at any of the `count` waypoints `step`
+    apart ahead of it is shifted by an obstacle: the pose is part of a pass
+    (its labels leave the daemon's lane; relabel's `obstacle` column)."""
+    return any(shift(u + step * k, obstacles, path)[0] > 0 for k in range(count + 1))
+
+
 class ShiftedPath:
     """A RoutePath whose points move left around obstacles: point(u) like
     RoutePath.point, on the ideal path (exact on the straights the shifts

@@ -13,7 +13,10 @@ network learns to ignore the goal where there is no choice. Every view of
 a lane pose (the original and its augmented views) gets the pose's goal.
 labels.csv is rewritten (the old one kept as labels.csv.bak), the parts too,
 with a `junction` column (1: the pose is at a junction of its route, where
-the goal decides the way), which `train --junction-weight K` oversamples.
+the goal decides the way), which `train --junction-weight K` oversamples,
+and an `obstacle` column (1: the pose is part of a pass of an obstacle the
+dataset placed, its ideal path shifted into the left lane; see
+sim4cv.driving_obstacles), which `train --obstacle-weight K` oversamples.
 """
 
 import csv
@@ -23,6 +26,7 @@ from typing import Dict, Optional
 
 from . import driving_dataset as dd
 from . import driving_metrics as dm
+from . import driving_obstacles as dob
 
 
 def relabel(folder: str, seed: int = 0, log=print) -> Dict[str, int]:
@@ -38,14 +42,19 @@ def relabel(folder: str, seed: int = 0, log=print) -> Dict[str, int]:
     for r in rows:  # the lane pose of each sample: its original view
         if float(r["offset_side_m"]) == 0.0 and float(r["offset_yaw_deg"]) == 0.0:
             poses[(r["map"], r["route"], r["sample"])] = (float(r["view_x"]), float(r["view_y"]))
-    counts = {-1: 0, 0: 0, 1: 0, "junction": 0}
+    counts = {-1: 0, 0: 0, 1: 0, "junction": 0, "obstacle": 0}
+    settings = meta["settings"]
+    obstacles = {}  # (map, route) -> the arc lengths of the obstacles generate placed
     for r in rows:
         key = (r["map"], r["route"], r["sample"])
         if r["map"] not in goals_of:
             goals_of[r["map"]] = MapGoals(paths[r["map"]], seed)
         if (r["map"], r["route"]) not in lanes:
             info = dd.parse_map(paths[r["map"]])
-            lanes[(r["map"], r["route"])] = dd.RoutePath(info, r["route"])
+            lane = dd.RoutePath(info, r["route"])
+            lanes[(r["map"], r["route"])] = lane
+            obstacles[(r["map"], r["route"])] = dob.place(lane, settings.get("obstacles", 0), settings["seed"],
+                                                          r["map"])
         lane = lanes[(r["map"], r["route"])]
         x, y = poses[key]
         u = dm.nearest_u(lane, x, y)
@@ -54,17 +63,20 @@ def relabel(folder: str, seed: int = 0, log=print) -> Dict[str, int]:
         goal = maps_goals(r["route"], u)
         r["goal"] = str(goal)
         r["junction"] = "1" if hit is not None else "0"
+        passing = dob.passing(u, obstacles[(r["map"], r["route"])], lane, dd.WAYPOINT_STEP_M, dd.WAYPOINT_COUNT)
+        r["obstacle"] = "1" if passing else "0"
         counts[goal] += 1
         counts["junction"] += hit is not None
+        counts["obstacle"] += passing
     backup = os.path.join(folder, "labels.csv.bak")
     if not os.path.exists(backup):
         shutil.copyfile(os.path.join(folder, "labels.csv"), backup)
     with open(os.path.join(folder, "labels.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=columns + [c for c in ("junction",) if c not in columns])
+        w = csv.DictWriter(f, fieldnames=columns + [c for c in ("junction", "obstacle") if c not in columns])
         w.writeheader()
         w.writerows(rows)
-    log("%s: %d rows, %d at junctions; goals -1/0/+1: %d/%d/%d"
-        % (folder, len(rows), counts["junction"], counts[-1], counts[0], counts[1]))
+    log("%s: %d rows, %d at junctions, %d passing obstacles; goals -1/0/+1: %d/%d/%d"
+        % (folder, len(rows), counts["junction"], counts["obstacle"], counts[-1], counts[0], counts[1]))
     return counts
 
 

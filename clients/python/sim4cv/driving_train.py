@@ -4,7 +4,7 @@ on datasets written by sim4cv.driving_dataset.
     python3 -m sim4cv.driving_train --train DIR --val DIR --out OUT \\
         [--epochs N] [--batch 32] [--lr 5e-5] [--patience 5] [--downscale 2] \\
         [--goal] [--max-samples N] [--threads N] [--max-minutes M] [--force]
-        [--init MODEL.pt] [--junction-weight K] [--keep-epochs]
+        [--init MODEL.pt] [--junction-weight K] [--obstacle-weight K] [--keep-epochs]
 
 L2 (MSE) loss on the 8 offsets v1 h1 ... v4 h4, Adam, the validation loss
 after every epoch, early stopping on it (the best state is kept). Writes
@@ -36,7 +36,9 @@ TARGETS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
 REQUIRED = ["image"] + TARGETS + ["goal"]
 # the settings that make two models different (a rerun with other ones is refused unless --force)
 MODEL_SETTINGS = ("train", "val", "epochs", "batch", "lr", "patience", "downscale", "goal", "max_samples",
-                  "junction_weight")
+                  "junction_weight", "obstacle_weight")
+# relabel's 0/1 columns that --junction-weight and --obstacle-weight oversample
+WEIGHTED = ("junction", "obstacle")
 
 
 class TrainError(Exception):
@@ -72,9 +74,9 @@ class DrivingDataset(Dataset):
         self.rows = read_labels(folder, max_samples)
         self.targets = np.array([[float(r[c]) for c in TARGETS] for r in self.rows], dtype=np.float32)
         self.goals = np.array([float(r["goal"] or 0) for r in self.rows], dtype=np.float32).reshape(-1, 1)
-        # relabel's column: the pose is at a junction of its route (None: not relabelled)
-        self.junction = (np.array([r["junction"] == "1" for r in self.rows])
-                         if "junction" in self.rows[0] else None)
+        # relabel's columns, e.g. junction: the pose is at a junction of its route (None: not relabelled)
+        self.flags = {c: (np.array([r[c] == "1" for r in self.rows]) if c in self.rows[0] else None)
+                      for c in WEIGHTED}
         if not np.all(np.isfinite(self.targets)):
             raise TrainError("%s: labels.csv holds non-finite targets" % folder)
         self.height = DEFAULT_HEIGHT // downscale
@@ -121,19 +123,23 @@ def _evaluate(model, loader, use_goal):
     return total / max(n, 1)
 
 
-def _order(parts, folders, junction_weight: float, gen) -> dict:
-    """DataLoader arguments: a shuffle, or with junction_weight > 1 a draw in
-    which each junction sample is that many times as likely as another (as
+def _order(parts, folders, weights: Dict[str, float], gen) -> dict:
+    """DataLoader arguments: a shuffle, or, with a weight K > 1 for a column
+    of WEIGHTED (e.g. junction), a draw in which each sample flagged there is
+    K times as likely as another (weights of several columns multiply; as
     many draws as samples: an epoch stays one dataset's worth)."""
-    if junction_weight == 1.0:
+    used = {c: k for c, k in weights.items() if k != 1.0}
+    if not used:
         return dict(shuffle=True)
-    missing = [f for f, part in zip(folders, parts) if part.junction is None]
-    if missing:
-        raise TrainError("--junction-weight needs the junction column of `relabel`; %s has none (run "
-                         "python3 -m sim4cv.driving relabel --dataset %s)" % (", ".join(missing), " ".join(missing)))
-    junction = np.concatenate([part.junction for part in parts])
-    weights = torch.from_numpy(np.where(junction, junction_weight, 1.0))
-    return dict(sampler=WeightedRandomSampler(weights, len(junction), replacement=True, generator=gen))
+    draw = np.ones(sum(len(part) for part in parts))
+    for column, k in used.items():
+        missing = [f for f, part in zip(folders, parts) if part.flags[column] is None]
+        if missing:
+            raise TrainError("--%s-weight needs the %s column of `relabel`; %s has none (run "
+                             "python3 -m sim4cv.driving relabel --dataset %s)"
+                             % (column, column, ", ".join(missing), " ".join(missing)))
+        draw *= np.where(np.concatenate([part.flags[column] for part in parts]), k, 1.0)
+    return dict(sampler=WeightedRandomSampler(torch.from_numpy(draw), len(draw), replacement=True, generator=gen))
 
 
 def _check_out(out: str, settings: dict, force: bool) -> None:
@@ -158,21 +164,25 @@ def _check_out(out: str, settings: dict, force: bool) -> None:
 def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, lr: float = 5e-5,
           patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
           threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, init: str = "",
-          junction_weight: float = 1.0, keep_epochs: bool = False, log=print) -> dict:
+          junction_weight: float = 1.0, obstacle_weight: float = 1.0, keep_epochs: bool = False,
+          log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
     if epochs < 1 or batch < 1 or lr <= 0:
         raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
-    if not junction_weight >= 1.0:
-        raise TrainError("--junction-weight must be >= 1, got %g" % junction_weight)
+    weights = {"junction": junction_weight, "obstacle": obstacle_weight}
+    for column, k in weights.items():
+        if not k >= 1.0:
+            raise TrainError("--%s-weight must be >= 1, got %g" % (column, k))
     train_dirs = [train_dir] if isinstance(train_dir, str) else list(train_dir)
     train_path = (os.path.abspath(train_dirs[0]) if len(train_dirs) == 1
                   else [os.path.abspath(d) for d in train_dirs])
     settings = dict(train=train_path, val=os.path.abspath(val_dir), epochs=epochs, batch=batch,
                     lr=lr, patience=patience, downscale=downscale, goal=goal, max_samples=max_samples,
                     threads=threads, seed=seed)
-    if junction_weight != 1.0:  # written only when used, so older models' settings still match
-        settings["junction_weight"] = junction_weight
+    for column, k in weights.items():  # written only when used, so older models' settings still match
+        if k != 1.0:
+            settings[column + "_weight"] = k
     parts = [DrivingDataset(d, downscale, max_samples) for d in train_dirs]
     train_set = parts[0] if len(parts) == 1 else ConcatDataset(parts)
     train_set.height, train_set.width = parts[0].height, parts[0].width
@@ -205,7 +215,7 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
     gen = torch.Generator()
     gen.manual_seed(seed)
     train_loader = DataLoader(train_set, batch_size=batch, generator=gen,
-                              **_order(parts, train_dirs, junction_weight, gen))
+                              **_order(parts, train_dirs, weights, gen))
     val_loader = DataLoader(val_set, batch_size=batch, shuffle=False)
 
     history, best, best_epoch, best_state, waited = [], math.inf, 0, None, 0
@@ -308,6 +318,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
     p.add_argument("--junction-weight", type=float, default=1.0,
                    help="draw samples at junctions (relabel's junction column) this many times as often")
+    p.add_argument("--obstacle-weight", type=float, default=1.0,
+                   help="draw samples passing an obstacle (relabel's obstacle column) this many times as often")
     p.add_argument("--keep-epochs", action="store_true",
                    help="also write every epoch's weights to OUT/epochs/NN.pt (to choose by closed loop or average)")
     a = p.parse_args(argv)
@@ -315,7 +327,8 @@ def main(argv: Optional[List[str]] = None) -> int:
         train(a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience,
               downscale=a.downscale, goal=a.goal, max_samples=a.max_samples, threads=a.threads,
               force=a.force, seed=a.seed, max_minutes=a.max_minutes, init=a.init,
-              junction_weight=a.junction_weight, keep_epochs=a.keep_epochs, log=lambda m: print(m, flush=True))
+              junction_weight=a.junction_weight, obstacle_weight=a.obstacle_weight, keep_epochs=a.keep_epochs,
+              log=lambda m: print(m, flush=True))
     except TrainError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
