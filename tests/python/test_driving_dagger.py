@@ -18,6 +18,8 @@ from sim4cv import driving_dagger as dg  # noqa: E402
 from sim4cv import driving_dataset as dd  # noqa: E402
 from sim4cv import driving_eval as de  # noqa: E402
 from sim4cv import driving_labels as dl  # noqa: E402
+from sim4cv import driving_metrics as dm  # noqa: E402
+from sim4cv import driving_obstacles as dob  # noqa: E402
 
 TEST_MAP = os.path.join(REPO_ROOT, "scenes", "driving", "val", "04_desert.map")
 
@@ -29,6 +31,17 @@ class PullsLeft(de.ReferencePolicy):
     def waypoints(self, rgb, pose, progress):
         w = super().waypoints(rgb, pose, progress)
         return [v - 1.5 if i % 2 else v for i, v in enumerate(w)]
+
+
+class IgnoresObstacles(de.ReferencePolicy):
+    """The right lane's true waypoints, as if no car were parked in it."""
+    name = "ignores_obstacles"
+
+    def waypoints(self, rgb, pose, progress):
+        x, y, yaw = pose
+        lane = progress.path.lane
+        points = [lane.point(progress.u + 2.0 * k)[:2] for k in range(1, 5)]
+        return [c for vh in dl.encode(x, y, yaw, points) for c in vh]
 
 
 def test_pick_poses_keeps_the_poses_off_the_lane_once_per_step():
@@ -93,3 +106,35 @@ def test_bad_settings_and_an_unreadable_dataset_are_refused_before_driving(tmp_p
                    min_offset_m=0.1, min_yaw_deg=2.0, log=lambda *a: None)
     assert (tmp_path / "b" / "dataset.json").read_text() == "{not json"
     assert not (tmp_path / "b" / "drives" / "driving.json").exists()
+
+
+def test_with_obstacles_the_pass_a_policy_misses_is_taken_over_and_labelled(tmp_path):
+    meta = dg.collect(IgnoresObstacles(), [TEST_MAP], ["desert"], str(tmp_path), takeover_m=1.0, every_m=1.0,
+                      min_offset_m=0.1, min_yaw_deg=2.0, obstacles=1, log=lambda *a: None)
+    with open(tmp_path / "drives" / "driving.json") as f:
+        run = json.load(f)["maps"]["driving_val_04_desert"]["routes"]["loop"]
+    # the policy stays in the right lane: the reference takes over as the ideal path leaves it, and
+    # drives until the pass is over (a hand-back beside the parked car would steer into it)
+    assert run["obstacles"] == 1 and run["takeovers"] == 1 and run["collisions"] == 0 and run["completed"]
+    assert meta["settings"]["dagger"]["obstacles"] == 1 and meta["settings"]["obstacles"] == 1
+    with open(tmp_path / "labels.csv") as f:
+        rows = list(csv.DictReader(f))
+    lane = dd.RoutePath(dd.parse_map(TEST_MAP), "loop")
+    ideal = dob.ShiftedPath(lane, dob.place(lane, 1, 0, "driving_val_04_desert"))
+    passing = [r for r in rows if r["obstacle"] == "1" and float(r["offset_side_m"]) == 0
+               and float(r["offset_yaw_deg"]) == 0]
+    assert passing
+    shifted = 0
+    for r in passing:  # the lane view is the ideal path's pose, in the left lane beside the car
+        x, y = float(r["view_x"]), float(r["view_y"])
+        u = dm.nearest_u(lane, x, y)
+        assert (x, y) == pytest.approx(ideal.point(u)[:2], abs=0.05)
+        shifted += math.dist((x, y), lane.point(u)[:2]) > 1.0
+    assert shifted > 0
+    # the other obstacle count is other settings
+    with pytest.raises(dd.DatasetError, match="other settings"):
+        dg.collect(IgnoresObstacles(), [TEST_MAP], ["desert"], str(tmp_path), takeover_m=1.0, every_m=1.0,
+                   min_offset_m=0.1, min_yaw_deg=2.0, obstacles=2, log=lambda *a: None)
+    with pytest.raises(dd.DatasetError, match="--obstacles must be 0 or more, got -1"):
+        dg.collect(IgnoresObstacles(), [TEST_MAP], ["desert"], str(tmp_path / "n"), takeover_m=1.0, every_m=1.0,
+                   min_offset_m=0.1, min_yaw_deg=2.0, obstacles=-1, log=lambda *a: None)

@@ -146,8 +146,9 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     """Drives one lap of `route` under `policy` (with `obstacles` parked cars
     to pass, placed as the dataset places them); returns (run dict, rows, deviations).
     takeover_m > 0: the reference policy drives from that far off the ideal
-    path until the car is back within TAKEBACK_M (collecting a policy's
-    mistakes and the recoveries from them: sim4cv.driving_dagger)."""
+    path until the car is back within TAKEBACK_M and not passing an obstacle
+    (collecting a policy's mistakes and the recoveries from them:
+    sim4cv.driving_dagger)."""
     lane = RoutePath(info, route)
     # A policy driving the left lane (the mirror trick) is scored against the left lane's centre.
     offset = dob.LANE_SHIFT_M if getattr(policy, "lane", "right") == "left" else 0.0
@@ -194,8 +195,8 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
         if expert is not None:
             if not taking_over and abs(deviation) > takeover_m:
                 taking_over, takeovers = True, takeovers + 1
-            elif taking_over and abs(deviation) < TAKEBACK_M:
-                taking_over = False
+            elif taking_over and abs(deviation) < TAKEBACK_M and not path.shifted(progress.u):
+                taking_over = False  # not in the middle of passing an obstacle: beside it, a hand-back hits it
             expert_frames += taking_over
         driver = expert if taking_over else policy
         started = time.perf_counter()

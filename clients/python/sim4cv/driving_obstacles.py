@@ -111,6 +111,10 @@ class ShiftedPath:
         s += self.offset
         return (x - s * math.sin(heading), y + s * math.cos(heading), heading + math.atan(slope))
 
+    def shifted(self, u: float) -> bool:
+        """Whether an obstacle moves the path at u (a pass is under way)."""
+        return shift(u, self.obstacles, self.lane)[0] > 0
+
     def deviation(self, u: float, lane_deviation: float) -> float:
         """Signed distance (+ right) from the ideal path, given the signed
         distance from the right-lane centre at arc length u."""
