@@ -170,3 +170,22 @@ def test_the_steering_may_aim_at_a_farther_waypoint():
     assert dc.controls_from_waypoints(w, steer_waypoint=3)[0] == 0.0
     with pytest.raises(ValueError, match="steer_waypoint must be 1 ... 4, got 5"):
         dc.controls_from_waypoints(w, steer_waypoint=5)
+
+
+def test_turn_slowdown_lowers_the_cap_and_brakes_down_to_it():
+    turn = [2.00, 0.10, 3.97, 0.40, 5.91, 0.89, 7.79, 1.58]  # the right turn of radius 20 m above
+    # cap = 8 - 2 * 1.58 = 4.84 m/s: at 6 m/s no throttle and brake 0.5 * (6 - 4.84) = 0.58
+    assert dc.turn_speed_cap(1.58, 8.0, 2.0) == pytest.approx(4.84)
+    s, t, b = dc.controls_from_waypoints(turn, speed=6.0, max_speed=8.0, slowdown=2.0)
+    assert s > 0 and t == 0.0 and b == pytest.approx(0.58)
+    # below the cap: the paper's throttle rule, no brake
+    assert dc.controls_from_waypoints(turn, speed=4.0, max_speed=8.0, slowdown=2.0)[1:] == (pytest.approx(0.605), 0.0)
+    # the cap never falls below MIN_TURN_SPEED (4 m/s), nor above max_speed; the brake saturates at 1
+    assert dc.turn_speed_cap(10.0, 8.0, 2.0) == dc.MIN_TURN_SPEED == 4.0
+    assert dc.turn_speed_cap(10.0, 3.0, 2.0) == 3.0
+    assert dc.controls_from_waypoints(turn, speed=20.0, max_speed=8.0, slowdown=2.0)[2] == 1.0
+    # off (0, the default) or without a speed cap: brake 0 as before
+    assert dc.controls_from_waypoints(turn, speed=20.0, max_speed=8.0)[2] == 0.0
+    assert dc.controls_from_waypoints(turn, speed=20.0, slowdown=2.0)[2] == 0.0
+    with pytest.raises(ValueError, match="slowdown must be >= 0, got -1"):
+        dc.controls_from_waypoints(turn, speed=6.0, max_speed=8.0, slowdown=-1.0)

@@ -41,6 +41,8 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--steer-waypoint", type=int, default=1, choices=(1, 2, 3, 4),
                    help="the waypoint the steering aims at (1: the paper's rule)")
+    p.add_argument("--turn-slowdown", type=float, default=0.0,
+                   help="m/s of speed cap lost per metre of |h4|, braking down to it (0: the paper's throttle rule)")
     a = p.parse_args(argv)
     try:
         if a.policy == "reference":
@@ -55,10 +57,11 @@ def evaluate_main(argv: List[str]) -> int:
         surroundings = [s for s in a.surroundings.split(",") if s]
         if "," in a.conditions:
             de.evaluate_conditions(policy, a.maps, surroundings, a.out, [c for c in a.conditions.split(",") if c],
-                                   a.speed, a.frame_hz)
+                                   a.speed, a.frame_hz, obstacles=a.obstacles, seed=a.seed,
+                                   steer_waypoint=a.steer_waypoint, slowdown=a.turn_slowdown)
         else:
             de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz,
-                        obstacles=a.obstacles, seed=a.seed, steer_waypoint=a.steer_waypoint)
+                        obstacles=a.obstacles, seed=a.seed, steer_waypoint=a.steer_waypoint, slowdown=a.turn_slowdown)
     except (de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
