@@ -5,8 +5,8 @@
 # junction samples drawn 3 times as often (the mean of three epochs), then with
 # views near the lane, then two rounds of DAgger (the states the model drives
 # into, labelled), then parked cars to pass (obstacle data on every training
-# map, drawn 3 times as often) with two more DAgger rounds, on the extra maps
-# and with obstacles. About 8 hours on a 2-core machine.
+# map, drawn 3 times as often) and a third DAgger round, on the extra maps and
+# with obstacles. About 7 hours on a 2-core machine.
 # Usage: scripts/train_driving_model.sh [WORK_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/../clients/python"
@@ -51,8 +51,8 @@ run train --train "${all[@]}" --val "$W/val" --out "$W/dagger_model1" --init "$W
 # DAgger round 2: the states of round 1's epoch 2 (the best of its epochs on the validation maps)
 run dagger --model "$W/dagger_model1/epochs/02.pt" --maps train --out "$W/dagger2"
 all+=("$W/dagger2")
-# two epochs: the second (also the lower validation loss) is this stage's model.onnx, the shipped model
-# (docs/driving.md, "The shipped model")
+# two epochs: the second (also the lower validation loss) is this stage's model.onnx, the previous
+# shipped model
 run train --train "${all[@]}" --val "$W/val" --out "$W/dagger_model2" --init "$W/dagger_model1/epochs/02.pt" --goal \
     --junction-weight 3 --lr 1e-4 --batch 32 --epochs 2 --patience 0 --threads 2 --keep-epochs
 # DAgger round 3 with that model (the previous shipped model): the training maps, the extra maps
@@ -65,13 +65,9 @@ run generate --maps train --obstacles 4 --straight-step 2.4 --turn-step 0.6 --ra
     --out "$W/obstacles_all"
 run relabel --dataset "$W/obstacles_all"
 all+=("$W/dagger3" "$W/dagger3_extra" "$W/obstacles_all" "$W/dagger3_obstacles")
-# samples passing an obstacle drawn 3 times as often too
-run train --train "${all[@]}" --val "$W/val" --out "$W/obstacle_model" --init "$W/dagger_model2/model.pt" --goal \
+# samples passing an obstacle drawn 3 times as often too; epoch 2 (also the lower validation loss, so
+# this stage's model.onnx) is the shipped model (docs/driving.md, "The shipped model")
+run train --train "${all[@]}" --val "$W/val" --out "$W/shipped" --init "$W/dagger_model2/model.pt" --goal \
     --junction-weight 3 --obstacle-weight 3 --lr 1e-4 --batch 32 --epochs 2 --patience 0 --threads 2 --keep-epochs
-# DAgger round 4: that model (its epoch 2) on the extra maps with 4 parked cars per route
-run dagger --model "$W/obstacle_model/model.onnx" --maps extra --obstacles 4 --seed 3 --out "$W/dagger4"
-all+=("$W/dagger4")
-run train --train "${all[@]}" --val "$W/val" --out "$W/shipped" --init "$W/obstacle_model/model.pt" --goal \
-    --junction-weight 3 --obstacle-weight 3 --lr 5e-5 --batch 32 --epochs 2 --patience 0 --threads 2 --keep-epochs
 run evaluate --model "$W/shipped/model.onnx" --maps val --steer-waypoint 2 --out "$W/eval_val"
 run evaluate --model "$W/shipped/model.onnx" --maps test --steer-waypoint 2 --out "$W/eval"
