@@ -66,14 +66,14 @@ def pick_poses(rows: Sequence[dict], lane, every_m: float = DEFAULT_EVERY_M,
 def collect(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, takeover_m: float,
             every_m: float, min_offset_m: float, min_yaw_deg: float, steer_waypoint: int = 2,
             speed: float = de.DEFAULT_SPEED, seed: int = 0, obstacles: int = 0, log=print) -> dict:
+    """Drives `policy` (a driving_eval policy: NetworkPolicy, or any with
+    waypoints()) over the maps, then renders the poses off the lane into the
+    dataset `out`; returns dataset.json's content."""
     from .driving_guided import MapGoals
     from .driving_relabel import relabel
     if takeover_m <= de.TAKEBACK_M:
         raise dd.DatasetError("--takeover %g: more than %g m (the reference policy hands back within %g m)"
                               % (takeover_m, de.TAKEBACK_M, de.TAKEBACK_M))
-    """Drives `policy` (a driving_eval policy: NetworkPolicy, or any with
-    waypoints()) over the maps, then renders the poses off the lane into the
-    dataset `out`; returns dataset.json's content."""
     if every_m <= 0:
         raise dd.DatasetError("--every must be positive, got %g" % every_m)
     if obstacles < 0:
@@ -95,8 +95,7 @@ def collect(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, 
         for route in info["routes"]:
             with open(os.path.join(drives, "runs", "%s_%s.csv" % (info["name"], route)), newline="") as f:
                 rows = list(csv.DictReader(f))
-            lane = dd.RoutePath(info, route)
-            ideal = dob.ShiftedPath(lane, dob.place(lane, obstacles, seed, info["name"]))
+            ideal = dob.ShiftedPath.placed(dd.RoutePath(info, route), obstacles, seed, info["name"])
             plan[route] = pick_poses(rows, ideal, every_m, min_offset_m, min_yaw_deg)
         return plan
 

@@ -310,7 +310,7 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
                 raise DatasetError("%s: route %r of the daemon's WorldInfo is not in the map file" % (path, route))
             lane = RoutePath(info, route)
             # cars parked in the lane; the ideal path passes them in the left lane
-            ideal = dob.ShiftedPath(lane, dob.place(lane, settings.get("obstacles", 0), settings["seed"], name))
+            ideal = dob.ShiftedPath.placed(lane, settings.get("obstacles", 0), settings["seed"], name)
             for ox, oy, oyaw in ideal.obstacle_poses():
                 client.spawn("car", dob.OBSTACLE_NAME % counts["obstacles"], ox, oy, 0.0, math.degrees(oyaw))
                 counts["obstacles"] += 1
@@ -329,7 +329,7 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
                     raise DatasetError("%s route %r at %.1f m: the lane geometry is %.2f m off the daemon's lane"
                                        % (name, route, u, road.distance))
                 queried = [(p.position.x, p.position.y) for p in road.ahead]
-                if dob.passing(u, ideal.obstacles, lane, WAYPOINT_STEP_M, WAYPOINT_COUNT):
+                if ideal.passing(u, WAYPOINT_STEP_M, WAYPOINT_COUNT):
                     waypoints = geometric  # passing an obstacle: off the daemon's lane on purpose
                 elif len(queried) == WAYPOINT_COUNT and all(
                         math.hypot(a[0] - b[0], a[1] - b[1]) < 0.05 for a, b in zip(queried, geometric)):

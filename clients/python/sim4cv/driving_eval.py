@@ -153,7 +153,7 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
     lane = RoutePath(info, route)
     # A policy driving the left lane (the mirror trick) is scored against the left lane's centre.
     offset = dob.LANE_SHIFT_M if getattr(policy, "lane", "right") == "left" else 0.0
-    path = dob.ShiftedPath(lane, dob.place(lane, obstacles, seed, info["name"]), offset)
+    path = dob.ShiftedPath.placed(lane, obstacles, seed, info["name"], offset)
     parked = []
     for k, (ox, oy, oyaw) in enumerate(path.obstacle_poses()):
         client.spawn("car", dob.OBSTACLE_NAME % k, ox, oy, 0.0, math.degrees(oyaw))
@@ -196,7 +196,7 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
         if expert is not None:
             if not taking_over and abs(deviation) > takeover_m:
                 taking_over, takeovers = True, takeovers + 1
-            elif taking_over and abs(deviation) < TAKEBACK_M and not path.shifted(progress.u):
+            elif taking_over and abs(deviation) < TAKEBACK_M and not path.passing(progress.u):
                 taking_over = False  # not in the middle of passing an obstacle: beside it, a hand-back hits it
             expert_frames += taking_over
         driver = expert if taking_over else policy

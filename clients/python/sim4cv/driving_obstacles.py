@@ -83,13 +83,6 @@ def shift(u: float, obstacles: Sequence[float], path) -> Tuple[float, float]:
     return best, slope
 
 
-def passing(u: float, obstacles: Sequence[float], path, step: float, count: int) -> bool:
-    """Whether the ideal path at u or at any of the `count` waypoints `step`
-    apart ahead of it is shifted by an obstacle: the pose is part of a pass
-    (its labels leave the daemon's lane; relabel's `obstacle` column)."""
-    return any(shift(u + step * k, obstacles, path)[0] > 0 for k in range(count + 1))
-
-
 class ShiftedPath:
     """A RoutePath whose points move left around obstacles: point(u) like
     RoutePath.point, on the ideal path (exact on the straights the shifts
@@ -105,15 +98,25 @@ class ShiftedPath:
         self.length = lane.length
         self.segments = lane.segments
 
+    @classmethod
+    def placed(cls, lane, count: int, seed: int, map_name: str, offset: float = 0.0) -> "ShiftedPath":
+        """The ideal path of `lane` around the `count` obstacles `place` puts
+        there (the one placement the dataset, DAgger, relabel and the
+        evaluation share)."""
+        return cls(lane, place(lane, count, seed, map_name), offset)
+
     def point(self, u: float) -> Tuple[float, float, float]:
         x, y, heading = self.lane.point(u)
         s, slope = shift(u, self.obstacles, self.lane)
         s += self.offset
         return (x - s * math.sin(heading), y + s * math.cos(heading), heading + math.atan(slope))
 
-    def shifted(self, u: float) -> bool:
-        """Whether an obstacle moves the path at u (a pass is under way)."""
-        return shift(u, self.obstacles, self.lane)[0] > 0
+    def passing(self, u: float, step: float = 0.0, count: int = 0) -> bool:
+        """Whether an obstacle moves the path at u or at any of the `count`
+        points `step` apart ahead of it: a pass is under way (with a pose's
+        waypoints: its labels leave the daemon's lane; relabel's `obstacle`
+        column)."""
+        return any(shift(u + step * k, self.obstacles, self.lane)[0] > 0 for k in range(count + 1))
 
     def deviation(self, u: float, lane_deviation: float) -> float:
         """Signed distance (+ right) from the ideal path, given the signed

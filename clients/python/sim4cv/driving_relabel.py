@@ -44,26 +44,23 @@ def relabel(folder: str, seed: int = 0, log=print) -> Dict[str, int]:
             poses[(r["map"], r["route"], r["sample"])] = (float(r["view_x"]), float(r["view_y"]))
     counts = {-1: 0, 0: 0, 1: 0, "junction": 0, "obstacle": 0}
     settings = meta["settings"]
-    obstacles = {}  # (map, route) -> the arc lengths of the obstacles generate placed
     for r in rows:
         key = (r["map"], r["route"], r["sample"])
         if r["map"] not in goals_of:
             goals_of[r["map"]] = MapGoals(paths[r["map"]], seed)
-        if (r["map"], r["route"]) not in lanes:
-            info = dd.parse_map(paths[r["map"]])
-            lane = dd.RoutePath(info, r["route"])
-            lanes[(r["map"], r["route"])] = lane
-            obstacles[(r["map"], r["route"])] = dob.place(lane, settings.get("obstacles", 0), settings["seed"],
-                                                          r["map"])
-        lane = lanes[(r["map"], r["route"])]
+        if (r["map"], r["route"]) not in lanes:  # the ideal path around the obstacles generate placed
+            lane = dd.RoutePath(dd.parse_map(paths[r["map"]]), r["route"])
+            lanes[(r["map"], r["route"])] = dob.ShiftedPath.placed(lane, settings.get("obstacles", 0),
+                                                                   settings["seed"], r["map"])
+        ideal = lanes[(r["map"], r["route"])]
         x, y = poses[key]
-        u = dm.nearest_u(lane, x, y)
+        u = dm.nearest_u(ideal.lane, x, y)
         maps_goals = goals_of[r["map"]]
         hit = maps_goals.routes[r["route"]].junction_at(u)
         goal = maps_goals(r["route"], u)
         r["goal"] = str(goal)
         r["junction"] = "1" if hit is not None else "0"
-        passing = dob.passing(u, obstacles[(r["map"], r["route"])], lane, dd.WAYPOINT_STEP_M, dd.WAYPOINT_COUNT)
+        passing = ideal.passing(u, dd.WAYPOINT_STEP_M, dd.WAYPOINT_COUNT)
         r["obstacle"] = "1" if passing else "0"
         counts[goal] += 1
         counts["junction"] += hit is not None
