@@ -11,6 +11,7 @@ REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file_
 sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 
 from sim4cv import driving_compare as dcmp  # noqa: E402
+from sim4cv import driving_control as dc  # noqa: E402
 
 
 def overall(mean, within25, runs=4, completed=4):
@@ -43,10 +44,14 @@ def test_a_tiny_comparison_runs_end_to_end(tmp_path):
     m = os.path.join(REPO_ROOT, "scenes", "driving", "val", "01_desert.map")
     t = os.path.join(REPO_ROOT, "scenes", "driving", "test", "01_desert.map")
     result = dcmp.run(str(tmp_path), [m], [m], [t], step=8.0, random_views=1, epochs=1, max_minutes=1,
-                      surroundings=["desert"], arms=["none", "random"], max_samples=4, log=lambda *a: None)
+                      surroundings=["desert"], arms=["none", "random"], max_samples=4,
+                      controller=dc.Controller(steer_waypoint=2),
+                      log=lambda *a: None)
     assert set(result["arms"]) == {"none", "random"}
     assert result["arms"]["none"]["images"] == 4 and result["arms"]["random"]["images"] == 8
     with open(tmp_path / "comparison.json") as f:
         assert json.load(f)["arms"]["random"]["overall"]["runs"] == 1
     assert (tmp_path / "comparison.md").read_text().startswith("| | none views (here) | random views (here) |")
     assert (tmp_path / "random" / "eval" / "histogram.png").is_file()
+    with open(tmp_path / "random" / "eval" / "driving.json") as f:
+        assert json.load(f)["settings"]["steer_waypoint"] == 2  # every arm is driven with the same controller

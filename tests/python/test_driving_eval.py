@@ -13,6 +13,7 @@ import pytest
 REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 
+from sim4cv import driving_control as dc  # noqa: E402
 from sim4cv import driving_dataset as dd  # noqa: E402
 from sim4cv import driving_eval as de  # noqa: E402
 from sim4cv import driving_metrics as dm  # noqa: E402
@@ -180,6 +181,6 @@ def test_the_shipped_model_drives_a_lap_of_a_test_map(tmp_path):
     policy = de.NetworkPolicy(os.path.join(SHIPPED, "model.onnx"))
     policy.path = "model.onnx"
     report = de.evaluate(policy, [os.path.join(REPO_ROOT, "scenes", "driving", "test", "01_urban.map")], ["urban"],
-                         str(tmp_path), steer_waypoint=2, log=lambda *a: None)
+                         str(tmp_path), controller=dc.Controller(steer_waypoint=2), log=lambda *a: None)
     o = report["overall"]
     assert o["completed"] == 1 and o["mean_deviation_cm"] < 30.0 and o["within_1m"] > 0.97

@@ -189,3 +189,35 @@ def test_turn_slowdown_lowers_the_cap_and_brakes_down_to_it():
     assert dc.controls_from_waypoints(turn, speed=20.0, slowdown=2.0)[2] == 0.0
     with pytest.raises(ValueError, match="slowdown must be >= 0, got -1"):
         dc.controls_from_waypoints(turn, speed=6.0, max_speed=8.0, slowdown=-1.0)
+
+
+def test_the_controller_holds_the_choices_beyond_the_papers_rule():
+    w = [2.0, 0.5, 4.0, 2.0, 6.0, 0.0, 8.0, 1.58]
+    assert dc.Controller().controls(w) == dc.controls_from_waypoints(w)  # the defaults are the paper's rule
+    c = dc.Controller(steer_waypoint=2, gain=1.2, slowdown=2.0)
+    assert c.controls(w, speed=6.0, max_speed=8.0) == dc.controls_from_waypoints(
+        w, speed=6.0, max_speed=8.0, gain=1.2, steer_waypoint=2, slowdown=2.0)
+    assert c.controls(w)[0] == pytest.approx(1.2 * math.degrees(math.atan(0.5)) / 35.0)
+    assert c.settings() == {"steer_waypoint": 2, "steer_gain": 1.2, "slowdown": 2.0}
+    for bad, message in (({"steer_waypoint": 0}, "steer_waypoint must be 1 ... 4, got 0"),
+                         ({"gain": 0.0}, "gain must be positive, got 0.0"),
+                         ({"gain": float("nan")}, "gain must be positive, got nan"),
+                         ({"slowdown": -0.5}, "slowdown must be >= 0, got -0.5")):
+        with pytest.raises(ValueError, match=message):
+            dc.Controller(**bad)
+
+
+def test_the_controllers_options_are_one_list_for_every_command(capsys):
+    import argparse
+    p = argparse.ArgumentParser(prog="x")
+    dc.add_arguments(p, steer_waypoint=2)
+    assert dc.from_arguments(p.parse_args([])) == dc.Controller(steer_waypoint=2)
+    assert dc.from_arguments(p.parse_args(["--steer-gain", "1.35", "--turn-slowdown", "1"])) == \
+        dc.Controller(2, 1.35, 1.0)
+    with pytest.raises(ValueError, match="gain must be positive, got -1.0"):
+        dc.from_arguments(p.parse_args(["--steer-gain", "-1"]))
+    # evaluate refuses it before starting a daemon, with the message
+    from sim4cv import driving
+    with pytest.raises(SystemExit) as e:
+        driving.main(["evaluate", "--policy", "reference", "--out", "/nonexistent/x", "--steer-gain", "0"])
+    assert e.value.code == 2 and "gain must be positive, got 0.0" in capsys.readouterr().err

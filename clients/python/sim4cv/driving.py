@@ -17,6 +17,7 @@ import argparse
 import sys
 from typing import List, Optional
 
+from . import driving_control as dc
 from . import driving_eval as de
 
 
@@ -39,11 +40,12 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--obstacles", type=int, default=0,
                    help="cars parked in the lane per route, placed as the dataset places them (with --seed)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--steer-waypoint", type=int, default=1, choices=(1, 2, 3, 4),
-                   help="the waypoint the steering aims at (1: the paper's rule)")
-    p.add_argument("--turn-slowdown", type=float, default=0.0,
-                   help="m/s of speed cap lost per metre of |h4|, braking down to it (0: the paper's throttle rule)")
+    dc.add_arguments(p)
     a = p.parse_args(argv)
+    try:
+        controller = dc.from_arguments(a)
+    except ValueError as e:
+        p.error(str(e))
     try:
         if a.policy == "reference":
             policy = de.ReferencePolicy()
@@ -58,10 +60,10 @@ def evaluate_main(argv: List[str]) -> int:
         if "," in a.conditions:
             de.evaluate_conditions(policy, a.maps, surroundings, a.out, [c for c in a.conditions.split(",") if c],
                                    a.speed, a.frame_hz, obstacles=a.obstacles, seed=a.seed,
-                                   steer_waypoint=a.steer_waypoint, slowdown=a.turn_slowdown)
+                                   controller=controller)
         else:
             de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz,
-                        obstacles=a.obstacles, seed=a.seed, steer_waypoint=a.steer_waypoint, slowdown=a.turn_slowdown)
+                        obstacles=a.obstacles, seed=a.seed, controller=controller)
     except (de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -3,14 +3,16 @@
 and with random views, each trained and evaluated the same way.
 
     python3 -m sim4cv.driving compare --out DIR [--train-maps train] [--val-maps val] [--test-maps test]
-        [--step 2.4] [--random-views 3] [--max-minutes 10] [--epochs 30] [--lr 2e-4]
+        [--step 2.4] [--random-views 3] [--max-minutes 10] [--epochs 30] [--lr 2e-4] [--steer-waypoint 1] ...
 
 Equal image budgets: "none" renders one image per lane pose, "random" 1 +
 --random-views, "fixed" 1 + 24 (every offset x yaw of driving_labels'
 fixed set); the fixed arm samples its poses proportionally further apart so
 that it renders about as many images as the random arm (the paper gave its
 fixed-view model more data and still found it worse). Everything else is
-the same: maps, validation set, network, training budget, evaluation.
+the same: maps, validation set, network, training budget, evaluation
+(one controller, driving_control's options, for every arm: the paper's
+rule by default).
 
 Writes DIR/<arm>/{dataset,model,eval}/ and DIR/comparison.json,
 DIR/comparison.md (the paper's table layout, with the paper's numbers).
@@ -24,6 +26,7 @@ import sys
 import time
 from typing import List, Optional
 
+from . import driving_control as dc
 from . import driving_dataset as dd
 from . import driving_eval as de
 from . import driving_labels as dl
@@ -45,7 +48,8 @@ def views_per_pose(arm: str, random_views: int) -> int:
 
 def run(out: str, train_maps: List[str], val_maps: List[str], test_maps: List[str], step: float = 2.4,
         random_views: int = 3, max_minutes: float = 10.0, epochs: int = 30, lr: float = 2e-4,
-        surroundings=("desert", "urban"), arms=ARMS, max_samples: int = 0, log=print) -> dict:
+        surroundings=("desert", "urban"), arms=ARMS, max_samples: int = 0,
+        controller: dc.Controller = dc.Controller(), log=print) -> dict:
     """Generates, trains and evaluates each arm (max_samples: lane poses per map at most, for tests)."""
     from . import driving_train as dt
     os.makedirs(out, exist_ok=True)
@@ -79,14 +83,15 @@ def run(out: str, train_maps: List[str], val_maps: List[str], test_maps: List[st
         else:
             policy = de.NetworkPolicy(os.path.join(model_dir, "model.onnx"))
             policy.path = os.path.join(model_dir, "model.onnx")
-            report = de.evaluate(policy, test_maps, surroundings, eval_dir, log=log, label=arm)
+            report = de.evaluate(policy, test_maps, surroundings, eval_dir, log=log, label=arm,
+                                 controller=controller)
         results[arm] = {"images": meta["counts"]["images"], "samples": meta["counts"]["samples"],
                         "best_epoch": training["best_epoch"], "best_val_loss": training["best_val_loss"],
                         "epochs": len(training["epochs"]), "overall": report["overall"],
                         "seconds": round(time.monotonic() - started, 1)}
     comparison = {"settings": {"train_maps": train_maps, "val_maps": val_maps, "test_maps": test_maps,
                                "step_m": step, "random_views": random_views, "max_minutes": max_minutes,
-                               "epochs": epochs, "lr": lr},
+                               "epochs": epochs, "lr": lr, **controller.settings()},
                   "arms": results, "paper": dm.PAPER, "seconds": round(time.monotonic() - t0, 1)}
     comparison["findings"] = findings(results)
     with open(os.path.join(out, "comparison.json"), "w") as f:
@@ -154,12 +159,17 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--epochs", type=int, default=30)
     p.add_argument("--lr", type=float, default=2e-4)
     p.add_argument("--arms", default=",".join(ARMS))
+    dc.add_arguments(p)
     a = p.parse_args(argv)
+    try:
+        controller = dc.from_arguments(a)
+    except ValueError as e:
+        p.error(str(e))
     from .driving_train import TrainError
     try:
         run(a.out, a.train_maps, a.val_maps, a.test_maps, a.step, a.random_views, a.max_minutes, a.epochs, a.lr,
             [s for s in a.surroundings.split(",") if s], [x for x in a.arms.split(",") if x],
-            log=lambda m: print(m, flush=True))
+            controller=controller, log=lambda m: print(m, flush=True))
     except (dd.DatasetError, de.EvalError, TrainError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -30,10 +30,15 @@ car brakes when it is faster than the cap:
     cap = max(min(MIN_TURN_SPEED, max_speed), max_speed - slowdown * |h4|)
     brake = clip(BRAKE_PER_M_S * (speed - cap), 0, 1) when speed > cap
 
+`Controller` holds the choices beyond the paper's rule (the waypoint
+steered at, the gain, slowing for turns) once, for every command that
+drives (evaluate, dagger, compare: `add_arguments`, `from_arguments`).
+
 Pure functions, no daemon, no numpy.
 """
 
 import math
+from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple
 
 MAX_STEERING_DEG = 35.0  # CarParams.max_steering_deg (docs/vehicles.md)
@@ -103,3 +108,46 @@ def controls_from_waypoints(waypoints: Sequence[float], speed: Optional[float] =
             brake = min(1.0, BRAKE_PER_M_S * (speed - max_speed))
     throttle = throttle_from_waypoint(w[7], t_max, t_min, k, speed, max_speed)
     return steering, throttle, brake
+
+
+@dataclass(frozen=True)
+class Controller:
+    """How a policy's waypoints become controls; the defaults are the
+    paper's rule. steer_waypoint: the waypoint steered at (1 ... 4); gain:
+    multiplies the steering angle; slowdown: turn_speed_cap's (0: off)."""
+    steer_waypoint: int = 1
+    gain: float = 1.0
+    slowdown: float = 0.0
+
+    def __post_init__(self):
+        if self.steer_waypoint not in (1, 2, 3, 4):
+            raise ValueError("Controller: steer_waypoint must be 1 ... 4, got %r" % self.steer_waypoint)
+        if not self.gain > 0:
+            raise ValueError("Controller: gain must be positive, got %r" % self.gain)
+        if not self.slowdown >= 0:
+            raise ValueError("Controller: slowdown must be >= 0, got %r" % self.slowdown)
+
+    def controls(self, waypoints: Sequence[float], speed: Optional[float] = None,
+                 max_speed: Optional[float] = None) -> Tuple[float, float, float]:
+        """(steering, throttle, brake): controls_from_waypoints with these choices."""
+        return controls_from_waypoints(waypoints, speed=speed, max_speed=max_speed, gain=self.gain,
+                                       steer_waypoint=self.steer_waypoint, slowdown=self.slowdown)
+
+    def settings(self) -> dict:
+        """The keys a report records them under."""
+        return {"steer_waypoint": self.steer_waypoint, "steer_gain": self.gain, "slowdown": self.slowdown}
+
+
+def add_arguments(parser, steer_waypoint: int = 1) -> None:
+    """The Controller's command-line options (read back by from_arguments)."""
+    parser.add_argument("--steer-waypoint", type=int, default=steer_waypoint, choices=(1, 2, 3, 4),
+                        help="the waypoint the steering aims at (1: the paper's rule; default %(default)s)")
+    parser.add_argument("--steer-gain", type=float, default=1.0,
+                        help="multiplies the steering angle (1: the paper's rule)")
+    parser.add_argument("--turn-slowdown", type=float, default=0.0,
+                        help="m/s of speed cap lost per metre of |h4|, braking down to it (0: the paper's throttle)")
+
+
+def from_arguments(args) -> Controller:
+    """The Controller of add_arguments' options; ValueError names a bad one."""
+    return Controller(args.steer_waypoint, args.steer_gain, args.turn_slowdown)

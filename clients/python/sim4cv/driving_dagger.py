@@ -29,6 +29,7 @@ import os
 import sys
 from typing import Dict, List, Optional, Sequence
 
+from . import driving_control as dc
 from . import driving_dataset as dd
 from . import driving_eval as de
 from . import driving_labels as dl
@@ -64,8 +65,9 @@ def pick_poses(rows: Sequence[dict], lane, every_m: float = DEFAULT_EVERY_M,
 
 
 def collect(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, takeover_m: float,
-            every_m: float, min_offset_m: float, min_yaw_deg: float, steer_waypoint: int = 2,
-            speed: float = de.DEFAULT_SPEED, seed: int = 0, obstacles: int = 0, log=print) -> dict:
+            every_m: float, min_offset_m: float, min_yaw_deg: float,
+            controller: dc.Controller = dc.Controller(steer_waypoint=2), speed: float = de.DEFAULT_SPEED,
+            seed: int = 0, obstacles: int = 0, log=print) -> dict:
     """Drives `policy` (a driving_eval policy: NetworkPolicy, or any with
     waypoints()) over the maps, then renders the poses off the lane into the
     dataset `out`; returns dataset.json's content."""
@@ -80,13 +82,13 @@ def collect(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, 
         raise dd.DatasetError("--obstacles must be 0 or more, got %d" % obstacles)
     settings = {"model": getattr(policy, "path", None) or policy.name, "takeover_m": takeover_m,
                 "every_m": every_m, "min_offset_m": min_offset_m, "min_yaw_deg": min_yaw_deg,
-                "steer_waypoint": steer_waypoint, "speed_m_s": speed}
+                **controller.settings(), "speed_m_s": speed}
     if obstacles:  # only when used, so the datasets made before obstacles still match on a rerun
         settings["obstacles"] = obstacles
     _check_out(out, settings)
     drives = os.path.join(out, "drives")
     if not os.path.isfile(os.path.join(drives, "driving.json")):  # a rerun reuses finished drives
-        de.evaluate(policy, maps, surroundings, drives, speed, log=log, steer_waypoint=steer_waypoint,
+        de.evaluate(policy, maps, surroundings, drives, speed, log=log, controller=controller,
                     takeover_m=takeover_m, seed=seed, obstacles=obstacles)
 
     def poses(path: str) -> Dict[str, List]:
@@ -122,8 +124,8 @@ def _check_out(out: str, settings: dict) -> None:
         except (OSError, ValueError, KeyError) as e:
             raise dd.DatasetError("%s is unreadable (%s); refusing to overwrite it" % (os.path.join(out, name), e))
         old = old.get("dagger") if name == "dataset.json" else {
-            "model": old.get("model"), "takeover_m": old.get("takeover_m"), "steer_waypoint": old.get("steer_waypoint"),
-            "speed_m_s": old.get("speed_m_s"), "obstacles": old.get("obstacles") or None}
+            "model": old.get("model"), "takeover_m": old.get("takeover_m"), "speed_m_s": old.get("speed_m_s"),
+            "obstacles": old.get("obstacles") or None, **{k: old.get(k) for k in dc.Controller().settings()}}
         mine = settings if name == "dataset.json" else {k: settings.get(k) for k in old}
         if old != mine:
             raise dd.DatasetError("%s holds a dagger dataset of other settings (%s, not %s); use another --out; "
@@ -143,17 +145,21 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--min-offset", type=float, default=DEFAULT_MIN_OFFSET_M,
                    help="a pose is rendered from this many metres off the lane ...")
     p.add_argument("--min-yaw", type=float, default=DEFAULT_MIN_YAW_DEG, help="... or this many degrees")
-    p.add_argument("--steer-waypoint", type=int, default=2, choices=(1, 2, 3, 4))
+    dc.add_arguments(p, steer_waypoint=2)
     p.add_argument("--speed", type=float, default=de.DEFAULT_SPEED)
     p.add_argument("--seed", type=int, default=0, help="goals, and the obstacles' places as generate --seed")
     p.add_argument("--obstacles", type=int, default=0, help="cars parked per route, as generate --obstacles")
     a = p.parse_args(argv)
     surroundings = [s for s in a.surroundings.split(",") if s]
     try:
+        controller = dc.from_arguments(a)
+    except ValueError as e:
+        p.error(str(e))
+    try:
         policy = de.NetworkPolicy(a.model)
         policy.path = os.path.abspath(a.model)
         collect(policy, a.maps, surroundings, a.out, a.takeover, a.every, a.min_offset, a.min_yaw,
-                a.steer_waypoint, a.speed, a.seed, a.obstacles)
+                controller, a.speed, a.seed, a.obstacles)
     except (dd.DatasetError, de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -142,8 +142,8 @@ def _load_torch(path: str):
 # One route
 
 def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: float, log=print,
-                obstacles: int = 0, seed: int = 0, steer_waypoint: int = 1, takeover_m: float = 0.0,
-                slowdown: float = 0.0):
+                obstacles: int = 0, seed: int = 0, controller: dc.Controller = dc.Controller(),
+                takeover_m: float = 0.0):
     """Drives one lap of `route` under `policy` (with `obstacles` parked cars
     to pass, placed as the dataset places them); returns (run dict, rows, deviations).
     takeover_m > 0: the reference policy drives from that far off the ideal
@@ -203,8 +203,7 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
         started = time.perf_counter()
         w = driver.waypoints(frame.image("rgb"), (x, y, yaw), progress)
         infer_s += time.perf_counter() - started
-        steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed,
-                                                               steer_waypoint=steer_waypoint, slowdown=slowdown)
+        steering, throttle, brake = controller.controls(w, speed=car_speed, max_speed=speed)
         client.send_controls(ego, steering, throttle, brake)
         rows.append([round(t, 4), round(x, 3), round(y, 3), round(math.degrees(yaw), 2), round(progress.u, 3),
                      round(deviation, 4), round(car_speed, 3), round(steering, 4), round(throttle, 4),
@@ -246,7 +245,7 @@ ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering"
 
 def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, speed: float = DEFAULT_SPEED,
              conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "", obstacles: int = 0,
-             seed: int = 0, steer_waypoint: int = 1, takeover_m: float = 0.0, slowdown: float = 0.0) -> dict:
+             seed: int = 0, controller: dc.Controller = dc.Controller(), takeover_m: float = 0.0) -> dict:
     """Drives every route of every map; writes out/driving.json, out/runs/*.csv
     and the plots; returns driving.json's content. takeover_m: drive_route's."""
     import sim4cv
@@ -259,7 +258,7 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
                            "maps": [p for p, _ in resolved], "speed_m_s": speed, "conditions": conditions or "clear_noon",
                            "frame_hz": frame_hz, "off_road_m": OFF_ROAD_M,
                            "lane_departure_m": dm.LANE_DEPARTURE_M, "obstacles": obstacles, "seed": seed,
-                           "steer_waypoint": steer_waypoint, "takeover_m": takeover_m, "slowdown": slowdown},
+                           "takeover_m": takeover_m, **controller.settings()},
               "maps": {}}
     pooled: Dict[str, List] = {"overall": [], "desert": [], "urban": []}
     trajectories = {}
@@ -281,7 +280,7 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
                     if entity.name in ("car", "uav"):  # the map's own car and the UAV filming it
                         client.remove(entity.id)
                 run, rows, deviations, ideal = drive_route(client, info, route, policy, speed, frame_hz, log,
-                                                           obstacles, seed, steer_waypoint, takeover_m, slowdown)
+                                                           obstacles, seed, controller, takeover_m)
             runs[route] = run
             map_devs.append(deviations)
             _write_rows(os.path.join(out, "runs", "%s_%s.csv" % (name, route)), rows)
@@ -324,7 +323,7 @@ def evaluate_conditions(policy, maps: Sequence[str], surroundings: Sequence[str]
     """The same evaluation under each weather/time-of-day preset, into
     out/<preset>/; out/conditions.json and out/conditions.md compare them
     (how far the score falls out of the training distribution). `settings`:
-    evaluate's other keywords (steer_waypoint, slowdown, obstacles, seed)."""
+    evaluate's other keywords (controller, obstacles, seed)."""
     rows = {}
     for preset in presets:
         log("== conditions %s" % preset)
