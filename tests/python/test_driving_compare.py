@@ -53,5 +53,10 @@ def test_a_tiny_comparison_runs_end_to_end(tmp_path):
         assert json.load(f)["arms"]["random"]["overall"]["runs"] == 1
     assert (tmp_path / "comparison.md").read_text().startswith("| | none views (here) | random views (here) |")
     assert (tmp_path / "random" / "eval" / "histogram.png").is_file()
+    # every arm's network takes the goal, from relabelled datasets (the way at each junction)
+    with open(tmp_path / "none" / "model" / "training.json") as f:
+        assert json.load(f)["settings"]["goal"] is True
+    for folder in ("val", "none/dataset", "random/dataset"):
+        assert (tmp_path / folder / "labels.csv").read_text().splitlines()[0].endswith(",junction,obstacle")
     with open(tmp_path / "random" / "eval" / "driving.json") as f:
         assert json.load(f)["settings"]["steer_waypoint"] == 2  # every arm is driven with the same controller

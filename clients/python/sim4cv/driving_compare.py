@@ -14,6 +14,12 @@ the same: maps, validation set, network, training budget, evaluation
 (one controller, driving_control's options, for every arm: the paper's
 rule by default).
 
+Every arm's network takes the goal input (relabel sets it from the way the
+route takes at each junction; the evaluation gives it as a navigation
+system would): these maps' routes turn at junctions where the road also
+goes on, which no image shows, so without it every arm fails at the same
+junctions whatever its views (docs/driving.md, "Augmentation comparison").
+
 Writes DIR/<arm>/{dataset,model,eval}/ and DIR/comparison.json,
 DIR/comparison.md (the paper's table layout, with the paper's numbers).
 Resumes: finished datasets, models (training.json finished) and
@@ -52,9 +58,11 @@ def run(out: str, train_maps: List[str], val_maps: List[str], test_maps: List[st
         controller: dc.Controller = dc.Controller(), log=print) -> dict:
     """Generates, trains and evaluates each arm (max_samples: lane poses per map at most, for tests)."""
     from . import driving_train as dt
+    from .driving_relabel import relabel
     os.makedirs(out, exist_ok=True)
     val_dir = os.path.join(out, "val")
     dd.generate(val_maps, surroundings, val_dir, views="random", random_views=1, max_samples=max_samples, log=log)
+    relabel(val_dir, log=log)  # every run: generate rebuilds labels.csv from its parts
     results, t0 = {}, time.monotonic()
     budget = views_per_pose("random", random_views)
     for arm in arms:
@@ -64,6 +72,7 @@ def run(out: str, train_maps: List[str], val_maps: List[str], test_maps: List[st
         meta = dd.generate(train_maps, surroundings, os.path.join(base, "dataset"), views=arm,
                            random_views=random_views, straight_step=step * scale, turn_step=step * scale / 4,
                            max_samples=max_samples, log=log)
+        relabel(os.path.join(base, "dataset"), log=log)
         model_dir = os.path.join(base, "model")
         finished = False
         try:
@@ -72,7 +81,7 @@ def run(out: str, train_maps: List[str], val_maps: List[str], test_maps: List[st
         except (OSError, ValueError):
             pass
         if not finished:
-            dt.train(os.path.join(base, "dataset"), val_dir, model_dir, epochs=epochs, lr=lr, patience=3,
+            dt.train(os.path.join(base, "dataset"), val_dir, model_dir, epochs=epochs, lr=lr, patience=3, goal=True,
                      max_minutes=max_minutes, threads=0, force=True, log=log)
         with open(os.path.join(model_dir, "training.json")) as f:
             training = json.load(f)
