@@ -21,27 +21,25 @@ run relabel --dataset "$W/randomized" "$W/randomized_near"
 # the shipped model's datasets (scripts/train_driving_model.sh) and the randomised ones; its settings
 all=("$W/train" "$W/obstacles" "$W/guided" "$W/near" "$W/near_guided" "$W/dagger1" "$W/dagger2" "$W/dagger3"
      "$W/dagger3_extra" "$W/obstacles_all" "$W/dagger3_obstacles" "$W/randomized" "$W/randomized_near")
-run train --train "${all[@]}" --val "$W/val" --out "$W/randomized_model" --init ../../models/driving/model.pt --goal \
-    --junction-weight 3 --obstacle-weight 3 --lr 1e-4 --batch 32 --epochs 1 --patience 0 --threads 2
-for model in ../../models/driving "$W/randomized_model"; do
-    out="$W/conditions_$(basename "$model")"
-    run evaluate --model "$model/model.onnx" --maps test --steer-waypoint 2 --conditions clear_noon,dusk,fog,night \
-        --out "$out"
-done
-# the selection rule's numbers for the randomised model (docs/driving.md, "The shipped model")
-run evaluate --model "$W/randomized_model/model.onnx" --maps val --steer-waypoint 2 --out "$W/randomized_model/eval_val"
-run evaluate --model "$W/randomized_model/model.onnx" --maps val --steer-waypoint 2 --obstacles 2 \
-    --out "$W/randomized_model/eval_val_obstacles"
+# one epoch from the shipped model on DATASETS..., its settings; then the selection rule's numbers
+# (docs/driving.md, "The shipped model") and the test maps under each conditions preset
+randomized_model() {
+    local out=$1; shift
+    run train --train "$@" --val "$W/val" --out "$out" --init ../../models/driving/model.pt --goal \
+        --junction-weight 3 --obstacle-weight 3 --lr 1e-4 --batch 32 --epochs 1 --patience 0 --threads 2
+    run evaluate --model "$out/model.onnx" --maps val --steer-waypoint 2 --out "$out/eval_val"
+    run evaluate --model "$out/model.onnx" --maps val --steer-waypoint 2 --obstacles 2 --out "$out/eval_val_obstacles"
+    conditions "$out"
+}
+conditions() {
+    run evaluate --model "$1/model.onnx" --maps test --steer-waypoint 2 --conditions clear_noon,dusk,fog,night \
+        --out "$W/conditions_$(basename "$1")"
+}
+conditions ../../models/driving
+randomized_model "$W/randomized_model" "${all[@]}"
 # the randomised model above loses the passing (8 of 16 parked cars hit on the validation maps): the
 # same with parked cars in randomised images too (4 per route on every training map, as obstacles_all)
 run generate --maps train --obstacles 4 --straight-step 2.4 --turn-step 0.6 --random-views 3 --seed 2 --randomize 13 \
     --out "$W/randomized_obstacles"
 run relabel --dataset "$W/randomized_obstacles"
-run train --train "${all[@]}" "$W/randomized_obstacles" --val "$W/val" --out "$W/randomized_model2" \
-    --init ../../models/driving/model.pt --goal --junction-weight 3 --obstacle-weight 3 --lr 1e-4 --batch 32 \
-    --epochs 1 --patience 0 --threads 2
-run evaluate --model "$W/randomized_model2/model.onnx" --maps val --steer-waypoint 2 --out "$W/randomized_model2/eval_val"
-run evaluate --model "$W/randomized_model2/model.onnx" --maps val --steer-waypoint 2 --obstacles 2 \
-    --out "$W/randomized_model2/eval_val_obstacles"
-run evaluate --model "$W/randomized_model2/model.onnx" --maps test --steer-waypoint 2 \
-    --conditions clear_noon,dusk,fog,night --out "$W/conditions_randomized_model2"
+randomized_model "$W/randomized_model2" "${all[@]}" "$W/randomized_obstacles"

@@ -211,11 +211,12 @@ def test_the_controllers_options_are_one_list_for_every_command(capsys):
     import argparse
     p = argparse.ArgumentParser(prog="x")
     dc.add_arguments(p, steer_waypoint=2)
-    assert dc.from_arguments(p.parse_args([])) == dc.Controller(steer_waypoint=2)
-    assert dc.from_arguments(p.parse_args(["--steer-gain", "1.35", "--turn-slowdown", "1"])) == \
+    assert dc.from_arguments(p, p.parse_args([])) == dc.Controller(steer_waypoint=2)
+    assert dc.from_arguments(p, p.parse_args(["--steer-gain", "1.35", "--turn-slowdown", "1"])) == \
         dc.Controller(2, 1.35, 1.0)
-    with pytest.raises(ValueError, match="gain must be positive, got -1.0"):
-        dc.from_arguments(p.parse_args(["--steer-gain", "-1"]))
+    with pytest.raises(SystemExit) as e:
+        dc.from_arguments(p, p.parse_args(["--steer-gain", "-1"]))
+    assert e.value.code == 2 and "gain must be positive, got -1.0" in capsys.readouterr().err
     # evaluate refuses it before starting a daemon, with the message
     from sim4cv import driving
     with pytest.raises(SystemExit) as e:

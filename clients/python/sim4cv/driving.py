@@ -42,10 +42,7 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--seed", type=int, default=0)
     dc.add_arguments(p)
     a = p.parse_args(argv)
-    try:
-        controller = dc.from_arguments(a)
-    except ValueError as e:
-        p.error(str(e))
+    controller = dc.from_arguments(p, a)
     try:
         if a.policy == "reference":
             policy = de.ReferencePolicy()

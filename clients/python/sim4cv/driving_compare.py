@@ -170,10 +170,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--arms", default=",".join(ARMS))
     dc.add_arguments(p)
     a = p.parse_args(argv)
-    try:
-        controller = dc.from_arguments(a)
-    except ValueError as e:
-        p.error(str(e))
+    controller = dc.from_arguments(p, a)
     from .driving_train import TrainError
     try:
         run(a.out, a.train_maps, a.val_maps, a.test_maps, a.step, a.random_views, a.max_minutes, a.epochs, a.lr,

@@ -148,6 +148,10 @@ def add_arguments(parser, steer_waypoint: int = 1) -> None:
                         help="m/s of speed cap lost per metre of |h4|, braking down to it (0: the paper's throttle)")
 
 
-def from_arguments(args) -> Controller:
-    """The Controller of add_arguments' options; ValueError names a bad one."""
-    return Controller(args.steer_waypoint, args.steer_gain, args.turn_slowdown)
+def from_arguments(parser, args) -> Controller:
+    """The Controller of add_arguments' options; a bad one ends the command
+    through parser.error (exit status 2) with Controller's message."""
+    try:
+        return Controller(args.steer_waypoint, args.steer_gain, args.turn_slowdown)
+    except ValueError as e:
+        parser.error(str(e))

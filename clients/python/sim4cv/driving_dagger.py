@@ -151,10 +151,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--obstacles", type=int, default=0, help="cars parked per route, as generate --obstacles")
     a = p.parse_args(argv)
     surroundings = [s for s in a.surroundings.split(",") if s]
-    try:
-        controller = dc.from_arguments(a)
-    except ValueError as e:
-        p.error(str(e))
+    controller = dc.from_arguments(p, a)
     try:
         policy = de.NetworkPolicy(a.model)
         policy.path = os.path.abspath(a.model)
