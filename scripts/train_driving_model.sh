@@ -59,7 +59,7 @@ run train --train "${all[@]}" --val "$W/val" --out "$W/dagger_model2" --init "$W
 # (never rendered otherwise) and the training maps with 4 parked cars per route; and obstacle
 # data on all 24 training maps
 run dagger --model "$W/dagger_model2/model.onnx" --maps train --out "$W/dagger3"
-run dagger --model "$W/dagger_model2/model.onnx" --maps extra --out "$W/dagger3_extra"
+run dagger --model "$W/dagger_model2/model.onnx" --maps ../../scenes/driving/extra/{01..12}_*.map --out "$W/dagger3_extra"
 run dagger --model "$W/dagger_model2/model.onnx" --maps train --obstacles 4 --seed 2 --out "$W/dagger3_obstacles"
 run generate --maps train --obstacles 4 --straight-step 2.4 --turn-step 0.6 --random-views 3 --seed 2 \
     --out "$W/obstacles_all"

@@ -3,7 +3,7 @@
 # (paper: 12 training, 4 validation, 4 test maps), each in a desert and an
 # urban form that share the road grid and differ only in dressing. Seeds and
 # sizes are fixed; the sizes give road lengths close to the paper's
-# (13678 m, 4086 m, 4977 m), and 12 extra maps for DAgger drives. Each map's second line records its command, and
+# (13678 m, 4086 m, 4977 m), and 24 extra maps for DAgger drives. Each map's second line records its command, and
 # tests/unit/map_shipped_test.cpp checks the files still match it.
 # Usage: scenes/driving/generate.sh [PATH/TO/sim4cv_mapgen]   (default: build/tools/sim4cv_mapgen)
 set -euo pipefail
@@ -30,4 +30,4 @@ generate val 4 201 12x11
 generate test 4 301 12x12
 # beyond the paper: maps that only DAgger drives (docs/driving.md, "The shipped model"),
 # so the model meets turns it was never trained on without touching val or test
-generate extra 12 401 12x12
+generate extra 24 401 12x12

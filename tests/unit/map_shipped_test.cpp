@@ -42,7 +42,7 @@ Map Load(const std::string& relative) { return LoadMapFile((kSource / relative).
 
 TEST(ShippedMapsTest, EveryMapParsesAndIsFit) {
   const std::vector<std::string> maps = ShippedMaps();
-  EXPECT_EQ(maps.size(), 4u + 2 * (12 + 4 + 4 + 12) + 2 * 6);  // scenes, driving (train, val, test, extra), guided
+  EXPECT_EQ(maps.size(), 4u + 2 * (12 + 4 + 4 + 24) + 2 * 6);  // scenes, driving (train, val, test, extra), guided
   for (const std::string& path : maps) {
     SCOPED_TRACE(path);
     const Map map = Load(path);
@@ -88,7 +88,7 @@ TEST(ShippedMapsTest, DrivingSetsPairDesertAndUrbanForms) {
   // Road lengths of the paper's sets; ours are within 10 %. The extra set
   // (maps only DAgger drives) is beyond the paper: 0, its length unchecked.
   const std::map<std::string, std::pair<int, double>> sets = {
-      {"train", {12, 13678.0}}, {"val", {4, 4086.0}}, {"test", {4, 4977.0}}, {"extra", {12, 0.0}}};
+      {"train", {12, 13678.0}}, {"val", {4, 4086.0}}, {"test", {4, 4977.0}}, {"extra", {24, 0.0}}};
   for (const auto& [set, expected] : sets) {
     double total = 0;
     for (int i = 1; i <= expected.first; ++i) {
