@@ -176,3 +176,46 @@ def test_kept_epochs_average_into_one_model_with_the_mean_weights(dataset, tmp_p
     assert subprocess.run([sys.executable, "-m", "sim4cv.driving", "average", "--models", epochs[0],
                            "--out", str(tmp_path / "x")], cwd=os.path.join(REPO_ROOT, "clients", "python"),
                           capture_output=True, text=True).stderr.startswith("error: average needs at least 2")
+
+
+def test_probe_puts_the_models_waypoints_beside_the_labels(dataset, tmp_path):
+    import csv
+    from sim4cv import driving_probe as dp
+    from sim4cv.driving import main as driving_main
+    out = tmp_path / "run"
+    dt.train(str(dataset), str(dataset), str(out), epochs=1, batch=8, downscale=2, threads=2, goal=True,
+             log=lambda *a: None)
+    model = dt.load_model(str(out / "model.pt"))
+    with open(dataset / "labels.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    lane = dp.select(rows, "driving_val_01_desert", (1, 3), lane_only=True)
+    assert [int(r["sample"]) for r in lane] == [1, 2, 3]  # one lane view per sample, the random views left out
+    assert len(dp.select(rows, samples=(1, 3))) == 9 and dp.select(rows, "no_such_map") == []
+
+    from sim4cv.driving_eval import NetworkPolicy
+    result = dp.probe(NetworkPolicy(str(out / "model.pt")), str(dataset), lane)
+    ds = dt.DrivingDataset(str(dataset), downscale=2)
+    errors = []
+    for row in result["rows"]:
+        image, goal, label = ds[[r["image"] for r in ds.rows].index(row["image"])]
+        with torch.no_grad():
+            want = model(image[None], goal[None]).numpy().reshape(-1)
+        got = [row["pred_" + k] for k in ("v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4")]
+        assert np.allclose(got, want, atol=1e-3)  # the closed loop's inference on the stored image
+        assert np.allclose([float(row[k]) for k in ("h1", "h2", "h3", "h4")], label.numpy()[1::2], atol=1e-4)
+        errors.append(np.abs(np.array(got[1::2]) - label.numpy()[1::2]))
+    assert np.allclose([result["mae_h"][h] for h in dp.H], np.mean(errors, axis=0), atol=1e-3)
+
+    # the command: the lines, the summary, the CSV; and its refusals with their messages
+    csv_out = tmp_path / "probe.csv"
+    assert driving_main(["probe", "--model", str(out / "model.onnx"), "--dataset", str(dataset),
+                         "--samples", "1:3", "--lane-only", "--out", str(csv_out)]) == 0
+    with open(csv_out, newline="") as f:
+        assert len(list(csv.DictReader(f))) == 3
+    with pytest.raises(dp.ProbeError, match="--samples 3-1: expected FIRST:LAST"):
+        dp.parse_samples("3-1")
+    with pytest.raises(dp.ProbeError, match="--samples 3:1: FIRST is after LAST"):
+        dp.parse_samples("3:1")
+    assert driving_main(["probe", "--model", str(out / "model.onnx"), "--dataset", str(tmp_path)]) == 2
+    assert driving_main(["probe", "--model", str(out / "model.onnx"), "--dataset", str(dataset),
+                         "--map", "no_such_map"]) == 2

@@ -11,6 +11,7 @@
     python3 -m sim4cv.driving compare --out DIR   (no / fixed / random views: sim4cv.driving_compare)
     python3 -m sim4cv.driving dagger --model M --maps train --out DIR   (the states M drives into: sim4cv.driving_dagger)
     python3 -m sim4cv.driving average --models A.pt B.pt ... --out DIR   (weight averaging: sim4cv.driving_average)
+    python3 -m sim4cv.driving probe --model M --dataset DIR   (predictions beside labels: sim4cv.driving_probe)
 """
 
 import argparse
@@ -135,7 +136,8 @@ def human_main(argv: List[str]) -> int:
 
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    commands = ("generate", "train", "evaluate", "drive", "compare", "human", "relabel", "average", "dagger")
+    commands = ("generate", "train", "evaluate", "drive", "compare", "human", "relabel", "average", "dagger",
+                "probe")
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2
@@ -155,6 +157,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     if command == "average":
         from . import driving_average
         return driving_average.main(rest)
+    if command == "probe":
+        from . import driving_probe
+        return driving_probe.main(rest)
     if command == "compare":
         from . import driving_compare
         return driving_compare.main(rest)

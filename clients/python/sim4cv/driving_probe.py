@@ -1,0 +1,127 @@
+"""A model's predicted waypoints beside a dataset's labels, image by image
+(docs/driving.md, "Where the network errs"): open loop, to see where in a
+turn the network's path goes wrong before asking why the car left the lane.
+
+    python3 -m sim4cv.driving probe --model M --dataset DIR [--map NAME] [--samples A:B] [--lane-only] [--out CSV]
+
+The images go through driving_eval.NetworkPolicy, the closed loop's own
+inference (the resize, the goal input), with each row's goal. Prints one
+line per image (true and predicted h, predicted v) and the mean absolute
+error of each h, over all rows and over the junction rows; --out also
+writes every row as CSV.
+"""
+
+import argparse
+import csv
+import os
+import sys
+from typing import List, Optional, Sequence
+
+from . import driving_eval as de
+
+H = ("h1", "h2", "h3", "h4")
+V = ("v1", "v2", "v3", "v4")
+
+
+class ProbeError(RuntimeError):
+    pass
+
+
+def parse_samples(text: str):
+    """'A:B' -> (A, B), both sample numbers included; '' -> None (all)."""
+    if not text:
+        return None
+    try:
+        first, last = (int(part) for part in text.split(":"))
+    except ValueError:
+        raise ProbeError("--samples %s: expected FIRST:LAST, two sample numbers" % text)
+    if first > last:
+        raise ProbeError("--samples %s: FIRST is after LAST" % text)
+    return first, last
+
+
+def select(rows: Sequence[dict], map_name: str = "", samples=None, lane_only: bool = False) -> List[dict]:
+    """The labels.csv rows of one map (all maps: ''), samples FIRST..LAST, and
+    with lane_only the lane views only (no offset, no turn)."""
+    out = []
+    for r in rows:
+        if map_name and r["map"] != map_name:
+            continue
+        if samples and not samples[0] <= int(r["sample"]) <= samples[1]:
+            continue
+        if lane_only and (float(r["offset_side_m"]) != 0.0 or float(r["offset_yaw_deg"]) != 0.0):
+            continue
+        out.append(r)
+    return out
+
+
+def probe(policy, dataset: str, rows: Sequence[dict]) -> dict:
+    """Runs `policy` (a NetworkPolicy) on each row's image: {"rows": [...],
+    "mae_h": {h: m}, "mae_h_junction": {h: m}, "images": n}."""
+    import cv2
+    results = []
+    for r in rows:
+        path = os.path.join(dataset, r["image"])
+        image = cv2.imread(path, cv2.IMREAD_COLOR)
+        if image is None:
+            raise ProbeError("%s: not readable as an image (labels.csv names it)" % path)
+        policy.goal = float(r.get("goal", 0) or 0)
+        out = policy.waypoints(cv2.cvtColor(image, cv2.COLOR_BGR2RGB), None, None)
+        row = dict(r)
+        row.update({"pred_" + k: out[i] for i, k in enumerate(sum(zip(V, H), ()))})
+        results.append(row)
+
+    def mae(subset):
+        if not subset:
+            return None
+        return {h: sum(abs(float(x[h]) - x["pred_" + h]) for x in subset) / len(subset) for h in H}
+    return {"rows": results, "images": len(results), "mae_h": mae(results),
+            "mae_h_junction": mae([x for x in results if str(x.get("junction", "0")) == "1"])}
+
+
+def _line(row: dict) -> str:
+    return ("%s sample %5s view (%8.2f, %8.2f, %7.1f) offset %5.2f m %6.1f deg goal %2s | h true %s | pred %s | v %s"
+            % (row["map"], row["sample"], float(row["view_x"]), float(row["view_y"]), float(row["view_yaw_deg"]),
+               float(row["offset_side_m"]), float(row["offset_yaw_deg"]), row.get("goal", "0"),
+               " ".join("%5.2f" % float(row[h]) for h in H), " ".join("%5.2f" % row["pred_" + h] for h in H),
+               " ".join("%4.1f" % row["pred_" + v] for v in V)))
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving probe",
+                                description="a model's waypoints beside a dataset's labels, image by image")
+    p.add_argument("--model", required=True, help="model.pt or model.onnx")
+    p.add_argument("--dataset", required=True, help="a dataset folder (holds labels.csv)")
+    p.add_argument("--map", default="", help="only this map's rows (its name, e.g. driving_val_02_desert)")
+    p.add_argument("--samples", default="", help="FIRST:LAST sample numbers (both included)")
+    p.add_argument("--lane-only", action="store_true", help="only the lane views (no offset, no turn)")
+    p.add_argument("--out", help="write every row, labels and predictions, to this CSV file")
+    a = p.parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        labels = os.path.join(a.dataset, "labels.csv")
+        if not os.path.isfile(labels):
+            raise ProbeError("%s: no labels.csv (not a dataset of sim4cv.driving generate)" % a.dataset)
+        with open(labels, newline="") as f:
+            rows = select(list(csv.DictReader(f)), a.map, parse_samples(a.samples), a.lane_only)
+        if not rows:
+            raise ProbeError("no row of %s matches --map %r --samples %r%s"
+                             % (labels, a.map, a.samples, " --lane-only" if a.lane_only else ""))
+        result = probe(de.NetworkPolicy(a.model), a.dataset, rows)
+    except (ProbeError, de.EvalError) as e:
+        print("error: %s" % e, file=sys.stderr)
+        return 2
+    for row in result["rows"]:
+        print(_line(row))
+    for name in ("mae_h", "mae_h_junction"):
+        if result[name]:
+            print("%s: %s" % (name, " ".join("%s %.3f m" % (h, m) for h, m in result[name].items())))
+    if a.out:
+        with open(a.out, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(result["rows"][0]))
+            w.writeheader()
+            w.writerows(result["rows"])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
