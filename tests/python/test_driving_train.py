@@ -205,6 +205,12 @@ def test_probe_puts_the_models_waypoints_beside_the_labels(dataset, tmp_path):
         assert np.allclose([float(row[k]) for k in ("h1", "h2", "h3", "h4")], label.numpy()[1::2], atol=1e-4)
         errors.append(np.abs(np.array(got[1::2]) - label.numpy()[1::2]))
     assert np.allclose([result["mae_h"][h] for h in dp.H], np.mean(errors, axis=0), atol=1e-3)
+    assert sum(g["images"] for g in result["h2_by_group"].values()) == 3
+    mean_h2 = sum(e["mean_error_m"] * e["images"] for e in result["h2_by_group"].values()) / 3
+    assert mean_h2 == pytest.approx(np.mean([r["pred_h2"] - float(r["h2"]) for r in result["rows"]]))
+    assert dp.group({"h2": "0.5", "junction": "1"}) == "right turn at junction"
+    assert dp.group({"h2": "-0.31", "junction": "0"}) == "left turn"
+    assert dp.group({"h2": "0.3"}) == "straight"
 
     # the command: the lines, the summary, the CSV; and its refusals with their messages
     csv_out = tmp_path / "probe.csv"

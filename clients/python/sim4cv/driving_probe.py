@@ -6,9 +6,11 @@ turn the network's path goes wrong before asking why the car left the lane.
 
 The images go through driving_eval.NetworkPolicy, the closed loop's own
 inference (the resize, the goal input), with each row's goal. Prints one
-line per image (true and predicted h, predicted v) and the mean absolute
-error of each h, over all rows and over the junction rows; --out also
-writes every row as CSV.
+line per image (true and predicted h, predicted v), the mean absolute
+error of each h over all rows and over the junction rows, and the error of
+h2 (the waypoint the controller steers at) by where the path goes: right
+turn, left turn or straight, at a junction or not. --out also writes every
+row as CSV.
 """
 
 import argparse
@@ -21,6 +23,7 @@ from . import driving_eval as de
 
 H = ("h1", "h2", "h3", "h4")
 V = ("v1", "v2", "v3", "v4")
+TURN_H2_M = 0.3  # |h2| beyond this: the path turns within the controller's 4 m (a radius under about 27 m)
 
 
 class ProbeError(RuntimeError):
@@ -75,8 +78,24 @@ def probe(policy, dataset: str, rows: Sequence[dict]) -> dict:
         if not subset:
             return None
         return {h: sum(abs(float(x[h]) - x["pred_" + h]) for x in subset) / len(subset) for h in H}
+    groups = {}
+    for x in results:
+        groups.setdefault(group(x), []).append(float(x["pred_h2"]) - float(x["h2"]))
     return {"rows": results, "images": len(results), "mae_h": mae(results),
-            "mae_h_junction": mae([x for x in results if str(x.get("junction", "0")) == "1"])}
+            "mae_h_junction": mae([x for x in results if str(x.get("junction", "0")) == "1"]),
+            "h2_by_group": {g: {"images": len(e), "mean_error_m": sum(e) / len(e),
+                                "mean_abs_error_m": sum(abs(v) for v in e) / len(e)}
+                            for g, e in sorted(groups.items())}}
+
+
+def group(row: dict) -> str:
+    """Where the labelled path goes at the second waypoint (the one the
+    controller steers at): 'right turn', 'left turn' (|h2| > TURN_H2_M) or
+    'straight', with ' at junction' for relabel's junction rows. Meant for
+    lane views (--lane-only): an offset view's h holds its offset too."""
+    h2 = float(row["h2"])
+    name = "right turn" if h2 > TURN_H2_M else "left turn" if h2 < -TURN_H2_M else "straight"
+    return name + (" at junction" if str(row.get("junction", "0")) == "1" else "")
 
 
 def _line(row: dict) -> str:
@@ -115,6 +134,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     for name in ("mae_h", "mae_h_junction"):
         if result[name]:
             print("%s: %s" % (name, " ".join("%s %.3f m" % (h, m) for h, m in result[name].items())))
+    for g, e in result["h2_by_group"].items():
+        print("h2 %s: %d images, mean error %+.3f m (positive: right of the label), mean absolute error %.3f m"
+              % (g, e["images"], e["mean_error_m"], e["mean_abs_error_m"]))
     if a.out:
         with open(a.out, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(result["rows"][0]))
