@@ -178,7 +178,7 @@ def test_kept_epochs_average_into_one_model_with_the_mean_weights(dataset, tmp_p
                           capture_output=True, text=True).stderr.startswith("error: average needs at least 2")
 
 
-def test_probe_puts_the_models_waypoints_beside_the_labels(dataset, tmp_path):
+def test_probe_puts_the_models_waypoints_beside_the_labels(dataset, tmp_path, capsys):
     import csv
     from sim4cv import driving_probe as dp
     from sim4cv.driving import main as driving_main
@@ -222,6 +222,9 @@ def test_probe_puts_the_models_waypoints_beside_the_labels(dataset, tmp_path):
         dp.parse_samples("3-1")
     with pytest.raises(dp.ProbeError, match="--samples 3:1: FIRST is after LAST"):
         dp.parse_samples("3:1")
+    capsys.readouterr()
     assert driving_main(["probe", "--model", str(out / "model.onnx"), "--dataset", str(tmp_path)]) == 2
+    assert "has no labels.csv" in capsys.readouterr().err
     assert driving_main(["probe", "--model", str(out / "model.onnx"), "--dataset", str(dataset),
                          "--map", "no_such_map"]) == 2
+    assert "matches --map 'no_such_map'" in capsys.readouterr().err

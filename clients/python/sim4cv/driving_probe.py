@@ -20,9 +20,9 @@ import sys
 from typing import List, Optional, Sequence
 
 from . import driving_eval as de
+from .driving_train import TARGETS, TrainError, read_labels  # the model's outputs in order; labels.csv's checks
 
-H = ("h1", "h2", "h3", "h4")
-V = ("v1", "v2", "v3", "v4")
+H, V = tuple(TARGETS[1::2]), tuple(TARGETS[0::2])
 TURN_H2_M = 0.3  # |h2| beyond this: the path turns within the controller's 4 m (a radius under about 27 m)
 
 
@@ -60,7 +60,7 @@ def select(rows: Sequence[dict], map_name: str = "", samples=None, lane_only: bo
 
 def probe(policy, dataset: str, rows: Sequence[dict]) -> dict:
     """Runs `policy` (a NetworkPolicy) on each row's image: {"rows": [...],
-    "mae_h": {h: m}, "mae_h_junction": {h: m}, "images": n}."""
+    "mae_h": {h: m}, "mae_h_junction": {h: m}, "h2_by_group": {group: {...}}, "images": n}."""
     import cv2
     results = []
     for r in rows:
@@ -71,7 +71,7 @@ def probe(policy, dataset: str, rows: Sequence[dict]) -> dict:
         policy.goal = float(r.get("goal", 0) or 0)
         out = policy.waypoints(cv2.cvtColor(image, cv2.COLOR_BGR2RGB), None, None)
         row = dict(r)
-        row.update({"pred_" + k: out[i] for i, k in enumerate(sum(zip(V, H), ()))})
+        row.update({"pred_" + k: value for k, value in zip(TARGETS, out)})
         results.append(row)
 
     def mae(subset):
@@ -82,7 +82,7 @@ def probe(policy, dataset: str, rows: Sequence[dict]) -> dict:
     for x in results:
         groups.setdefault(group(x), []).append(float(x["pred_h2"]) - float(x["h2"]))
     return {"rows": results, "images": len(results), "mae_h": mae(results),
-            "mae_h_junction": mae([x for x in results if str(x.get("junction", "0")) == "1"]),
+            "mae_h_junction": mae([x for x in results if _at_junction(x)]),
             "h2_by_group": {g: {"images": len(e), "mean_error_m": sum(e) / len(e),
                                 "mean_abs_error_m": sum(abs(v) for v in e) / len(e)}
                             for g, e in sorted(groups.items())}}
@@ -95,7 +95,11 @@ def group(row: dict) -> str:
     lane views (--lane-only): an offset view's h holds its offset too."""
     h2 = float(row["h2"])
     name = "right turn" if h2 > TURN_H2_M else "left turn" if h2 < -TURN_H2_M else "straight"
-    return name + (" at junction" if str(row.get("junction", "0")) == "1" else "")
+    return name + (" at junction" if _at_junction(row) else "")
+
+
+def _at_junction(row: dict) -> bool:
+    return str(row.get("junction", "0")) == "1"  # relabel's column; absent before relabel
 
 
 def _line(row: dict) -> str:
@@ -117,16 +121,12 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--out", help="write every row, labels and predictions, to this CSV file")
     a = p.parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        labels = os.path.join(a.dataset, "labels.csv")
-        if not os.path.isfile(labels):
-            raise ProbeError("%s: no labels.csv (not a dataset of sim4cv.driving generate)" % a.dataset)
-        with open(labels, newline="") as f:
-            rows = select(list(csv.DictReader(f)), a.map, parse_samples(a.samples), a.lane_only)
+        rows = select(read_labels(a.dataset), a.map, parse_samples(a.samples), a.lane_only)
         if not rows:
-            raise ProbeError("no row of %s matches --map %r --samples %r%s"
-                             % (labels, a.map, a.samples, " --lane-only" if a.lane_only else ""))
+            raise ProbeError("no row of %s/labels.csv matches --map %r --samples %r%s"
+                             % (a.dataset, a.map, a.samples, " --lane-only" if a.lane_only else ""))
         result = probe(de.NetworkPolicy(a.model), a.dataset, rows)
-    except (ProbeError, de.EvalError) as e:
+    except (ProbeError, TrainError, de.EvalError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
     for row in result["rows"]:
