@@ -12,9 +12,11 @@
     python3 -m sim4cv.driving dagger --model M --maps train --out DIR   (the states M drives into: sim4cv.driving_dagger)
     python3 -m sim4cv.driving average --models A.pt B.pt ... --out DIR   (weight averaging: sim4cv.driving_average)
     python3 -m sim4cv.driving probe --model M --dataset DIR   (predictions beside labels: sim4cv.driving_probe)
+    python3 -m sim4cv.driving head --init M.pt --train DIR --val DIR --out OUT   (the FC layers alone: sim4cv.driving_head)
 """
 
 import argparse
+import importlib
 import sys
 from typing import List, Optional
 
@@ -134,40 +136,25 @@ def human_main(argv: List[str]) -> int:
     return 0
 
 
+# the commands that are a module's main(argv), one line each
+MODULES = {"train": "driving_train", "relabel": "driving_relabel", "dagger": "driving_dagger",
+           "average": "driving_average", "probe": "driving_probe", "compare": "driving_compare",
+           "head": "driving_head"}
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    commands = ("generate", "train", "evaluate", "drive", "compare", "human", "relabel", "average", "dagger",
-                "probe")
-    if not argv or argv[0] not in commands:
+    local = {"evaluate": evaluate_main, "drive": drive_main, "human": human_main}
+    if not argv or argv[0] not in set(MODULES) | set(local) | {"generate"}:
         print(__doc__, file=sys.stderr)
         return 2
     command, rest = argv[0], argv[1:]
-    if command == "evaluate":
-        return evaluate_main(rest)
-    if command == "drive":
-        return drive_main(rest)
-    if command == "relabel":
-        from . import driving_relabel
-        return driving_relabel.main(rest)
-    if command == "human":
-        return human_main(rest)
-    if command == "dagger":
-        from . import driving_dagger
-        return driving_dagger.main(rest)
-    if command == "average":
-        from . import driving_average
-        return driving_average.main(rest)
-    if command == "probe":
-        from . import driving_probe
-        return driving_probe.main(rest)
-    if command == "compare":
-        from . import driving_compare
-        return driving_compare.main(rest)
+    if command in local:
+        return local[command](rest)
     if command == "generate":
         from . import driving_dataset
         return driving_dataset.main(["generate"] + rest)
-    from . import driving_train
-    return driving_train.main(rest)
+    return importlib.import_module("." + MODULES[command], __package__).main(rest)
 
 
 if __name__ == "__main__":

@@ -94,12 +94,20 @@ if nn is not None:
             self.fc2 = nn.Linear(hidden, outputs)
 
         def forward(self, image, goal=None):
+            return self.head(self.encode(image), goal)
+
+        def encode(self, image):
+            """The convolutions and the pooling: N x (64*2*4) features, what
+            the fully connected layers see (driving_head trains those alone)."""
             x = image / 255.0 - 0.5
             x = self.features(x)
             kh, sh = pool_window(int(x.shape[2]), POOL_SIZE[0])
             kw, sw = pool_window(int(x.shape[3]), POOL_SIZE[1])
             x = F.avg_pool2d(x, (kh, kw), stride=(sh, sw))
-            x = torch.flatten(x, 1)
+            return torch.flatten(x, 1)
+
+        def head(self, x, goal=None):
+            """The fully connected layers on encode's features (+ the goal)."""
             if self.use_goal:
                 if goal is None:
                     goal = torch.zeros(x.shape[0], 1, dtype=x.dtype, device=x.device)

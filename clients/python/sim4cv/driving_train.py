@@ -142,7 +142,7 @@ def _order(parts, folders, weights: Dict[str, float], gen) -> dict:
     return dict(sampler=WeightedRandomSampler(torch.from_numpy(draw), len(draw), replacement=True, generator=gen))
 
 
-def _check_out(out: str, settings: dict, force: bool) -> None:
+def _check_out(out: str, settings: dict, force: bool, keys=MODEL_SETTINGS) -> None:
     path = os.path.join(out, "training.json")
     if os.path.exists(out) and not os.path.isdir(out):
         raise TrainError("output %s is not a folder" % out)
@@ -155,7 +155,7 @@ def _check_out(out: str, settings: dict, force: bool) -> None:
             old = json.load(f).get("settings", {})
     except (OSError, ValueError) as e:
         raise TrainError("%s: unreadable training.json (%s); use --force to overwrite" % (out, e))
-    differ = [k for k in MODEL_SETTINGS if old.get(k) != settings.get(k)]
+    differ = [k for k in keys if old.get(k) != settings.get(k)]
     if differ:
         raise TrainError("%s holds a model trained with other settings (%s); use --force to overwrite"
                          % (out, ", ".join("%s: %r -> %r" % (k, old.get(k), settings.get(k)) for k in differ)))
