@@ -6,7 +6,8 @@
 # views near the lane, then two rounds of DAgger (the states the model drives
 # into, labelled), then parked cars to pass (obstacle data on every training
 # map, drawn 3 times as often) and a third DAgger round, on the extra maps and
-# with obstacles. About 7 hours on a 2-core machine.
+# with obstacles; last, the fully connected layers alone on right turns through junctions and on that
+# model's drives on the extra maps. About 7.5 hours on a 2-core machine.
 # Usage: scripts/train_driving_model.sh [WORK_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/../clients/python"
@@ -66,8 +67,23 @@ run generate --maps train --obstacles 4 --straight-step 2.4 --turn-step 0.6 --ra
 run relabel --dataset "$W/obstacles_all"
 all+=("$W/dagger3" "$W/dagger3_extra" "$W/obstacles_all" "$W/dagger3_obstacles")
 # samples passing an obstacle drawn 3 times as often too; epoch 2 (also the lower validation loss, so
-# this stage's model.onnx) is the shipped model (docs/driving.md, "The shipped model")
-run train --train "${all[@]}" --val "$W/val" --out "$W/shipped" --init "$W/dagger_model2/model.pt" --goal \
+# this stage's model.onnx) was the previous shipped model (docs/driving.md, "The shipped model")
+run train --train "${all[@]}" --val "$W/val" --out "$W/round3" --init "$W/dagger_model2/model.pt" --goal \
     --junction-weight 3 --obstacle-weight 3 --lr 1e-4 --batch 32 --epochs 2 --patience 0 --threads 2 --keep-epochs
-run evaluate --model "$W/shipped/model.onnx" --maps val --steer-waypoint 2 --out "$W/eval_val"
-run evaluate --model "$W/shipped/model.onnx" --maps test --steer-waypoint 2 --out "$W/eval"
+# the head alone (docs/driving.md, "Training the head alone"): that model's drives on the 24 extra maps,
+# without and with 4 parked cars per route (DAgger rounds 5 and 6), near views at every turn of the
+# extra maps and of the junction maps (right turns through junctions), then 8 epochs of the fully
+# connected layers on those and the lane, near, obstacle and junction-map sets; the last epoch ships
+run dagger --model "$W/round3/model.onnx" --maps extra --out "$W/dagger_extra"
+run dagger --model "$W/round3/model.onnx" --maps extra --obstacles 4 --seed 3 --out "$W/dagger_extra_obs"
+run generate --maps extra --straight-step 40 --turn-step 0.2 --random-views 2 --offset-range 0.5 --yaw-range 5 \
+    --seed 7 --out "$W/extra_turns"
+/usr/bin/python3 -m sim4cv.driving_guided generate --maps ../../scenes/driving/guided/train/0{1,2,3}_{desert,urban}.map \
+    --out "$W/guided_turns" --straight-step 40 --turn-step 0.5 --random-views 1 --offset-range 0.5 --yaw-range 5 --seed 5
+run relabel --dataset "$W/extra_turns" "$W/guided_turns"
+run head --init "$W/round3/model.pt" --train "$W/train" "$W/near" "$W/obstacles_all" "$W/guided" "$W/guided_turns" \
+    "$W/dagger_extra" "$W/extra_turns" "$W/dagger_extra_obs" --val "$W/val" --out "$W/shipped" --epochs 8 \
+    --lr 1e-4 --junction-weight 3 --threads 2 --keep-epochs --last
+# the shipped evaluation: steering at waypoint 2 with gain 0.9
+run evaluate --model "$W/shipped/model.onnx" --maps val --steer-waypoint 2 --steer-gain 0.9 --out "$W/eval_val"
+run evaluate --model "$W/shipped/model.onnx" --maps test --steer-waypoint 2 --steer-gain 0.9 --out "$W/eval"

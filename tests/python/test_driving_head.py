@@ -59,13 +59,36 @@ def test_only_the_head_moves_and_the_features_are_cached(trained, tmp_path):
         assert torch.allclose(model.encode(image[None]), before.encode(image[None]))
     assert np.allclose(run(image.numpy().transpose(1, 2, 0).astype(np.uint8), float(goal)), want, atol=1e-3)
 
-    # a second run reads the features from the cache (no encoding) and gives the same model
+    # a second run reads the features from the cache (no encoding) and gives the same model; with
+    # last, model.pt is the last epoch whatever the validation loss
     logs.clear()
-    dh.train_head(init, [ds], ds, str(tmp_path / "m2"), epochs=3, batch=4, lr=1e-3, cache=str(tmp_path / "c"),
-                  threads=2, keep_epochs=True, log=logs.append)
+    meta = dh.train_head(init, [ds], ds, str(tmp_path / "m2"), epochs=3, batch=4, lr=1e-3, cache=str(tmp_path / "c"),
+                         threads=2, keep_epochs=True, last=True, log=logs.append)
     assert not any(line.startswith("encoded") for line in logs)
-    again = dt.load_model(str(tmp_path / "m2" / "epochs" / "03.pt"))
-    assert all(torch.allclose(v, again.state_dict()[k], atol=1e-6) for k, v in after.state_dict().items())
+    assert meta["best_epoch"] == 3 and logs[-1].startswith("last epoch 3")
+    for name in ("epochs/03.pt", "model.pt"):
+        again = dt.load_model(str(tmp_path / "m2" / name))
+        assert all(torch.allclose(v, again.state_dict()[k], atol=1e-6) for k, v in after.state_dict().items())
+
+
+def test_right_turns_at_junctions_are_drawn_k_times_as_often_again():
+    from torch.utils.data import WeightedRandomSampler
+
+    class Part:  # what _right_turns reads of a DrivingDataset: relabel's junction column
+        def __init__(self, junction):
+            self.flags = {"junction": None if junction is None else np.array(junction)}
+
+    goals = torch.tensor([[1.0], [1.0], [-1.0], [1.0]])  # +1: the route turns right there
+    parts = [Part([True, False]), Part([True, True])]
+    order = dh._right_turns(dict(shuffle=True), parts, ["a", "b"], goals, 4.0, torch.Generator())
+    assert order["sampler"].weights.tolist() == [4.0, 1.0, 1.0, 4.0]
+    # on top of the junction weight (3): a right turn at a junction 12 times as likely as a straight sample
+    weighted = dict(sampler=WeightedRandomSampler(torch.tensor([3.0, 1.0, 3.0, 3.0]), 4))
+    assert dh._right_turns(weighted, parts, ["a", "b"], goals, 4.0, torch.Generator())["sampler"].weights.tolist() \
+        == [12.0, 1.0, 3.0, 12.0]
+    with pytest.raises(dt.TrainError, match="--right-turn-weight needs the junction column of `relabel`; b has none"):
+        dh._right_turns(dict(shuffle=True), [Part([True, False]), Part(None)], ["a", "b"], goals, 4.0,
+                        torch.Generator())
 
 
 def test_refusals(trained, tmp_path, capsys):
@@ -76,6 +99,8 @@ def test_refusals(trained, tmp_path, capsys):
         dh.train_head(init, [ds], ds, str(tmp_path / "m"), junction_weight=3, log=lambda *a: None)
     with pytest.raises(dt.TrainError, match="--junction-weight must be >= 1, got 0.5"):
         dh.train_head(init, [ds], ds, str(tmp_path / "m"), junction_weight=0.5, log=lambda *a: None)
+    with pytest.raises(dt.TrainError, match="--right-turn-weight must be >= 1, got 0"):
+        dh.train_head(init, [ds], ds, str(tmp_path / "m"), right_turn_weight=0, log=lambda *a: None)
     dh.train_head(init, [ds], ds, str(tmp_path / "m"), epochs=1, log=lambda *a: None)
     with pytest.raises(dt.TrainError, match="other settings.*lr"):
         dh.train_head(init, [ds], ds, str(tmp_path / "m"), epochs=1, lr=1e-2, log=lambda *a: None)

@@ -12,7 +12,7 @@
     python3 -m sim4cv.driving dagger --model M --maps train --out DIR   (the states M drives into: sim4cv.driving_dagger)
     python3 -m sim4cv.driving average --models A.pt B.pt ... --out DIR   (weight averaging: sim4cv.driving_average)
     python3 -m sim4cv.driving probe --model M --dataset DIR   (predictions beside labels: sim4cv.driving_probe)
-    python3 -m sim4cv.driving head --init M.pt --train DIR --val DIR --out OUT   (the FC layers alone: sim4cv.driving_head)
+    python3 -m sim4cv.driving head --init M.pt --train DIR --val DIR --out OUT   (FC layers only: driving_head)
 """
 
 import argparse

@@ -8,11 +8,12 @@ rates or weights can be tried on the same data.
 
     python3 -m sim4cv.driving head --init MODEL.pt --train DIR [DIR ...] --val DIR --out OUT \\
         [--epochs 20] [--batch 256] [--lr 1e-4] [--junction-weight K] [--obstacle-weight K] \\
-        [--cache DIR] [--threads N] [--seed 0] [--keep-epochs] [--force]
+        [--right-turn-weight K] [--cache DIR] [--threads N] [--seed 0] [--keep-epochs] [--last] [--force]
 
 Writes what `train` writes (OUT/model.pt, model.onnx, training.json; the
 best validation epoch; with --keep-epochs every epoch's OUT/epochs/NN.pt), so
-evaluate, average and probe take its models as they are. Refusals (exit
+evaluate, average and probe take its models as they are; with --last,
+model.pt and model.onnx are the last epoch's. Refusals (exit
 status 2, "error: ..."): those of `train`, and an --init that is not a
 model.pt of `train`.
 """
@@ -28,13 +29,14 @@ from typing import List, Optional
 
 import numpy as np
 import torch
-from torch.utils.data import DataLoader, Dataset
+from torch.utils.data import DataLoader, Dataset, WeightedRandomSampler
 
 from sim4cv.driving_train import (DrivingDataset, TrainError, _check_out, _order, _save, _write,
                                   load_model)
 
 # what makes two head models different (a rerun with other ones is refused unless --force)
-HEAD_SETTINGS = ("train", "val", "epochs", "batch", "lr", "init", "junction_weight", "obstacle_weight")
+HEAD_SETTINGS = ("train", "val", "epochs", "batch", "lr", "init", "junction_weight", "obstacle_weight",
+                 "right_turn_weight")
 
 
 class _Images(Dataset):
@@ -96,16 +98,31 @@ def _loss(model, features, goals, targets, use_goal, batch=4096) -> float:
     return total / max(len(features), 1) / targets.shape[1]
 
 
+def _right_turns(order: dict, parts, folders, goals, k: float, gen) -> dict:
+    """`order` with the junction samples whose goal is a right turn drawn k
+    times as often again: the turns the paper-sized maps' anticlockwise
+    loops hardly hold (docs/driving.md, "Where the shipped model errs")."""
+    missing = [f for f, part in zip(folders, parts) if part.flags["junction"] is None]
+    if missing:
+        raise TrainError("--right-turn-weight needs the junction column of `relabel`; %s has none"
+                         % ", ".join(missing))
+    draw = order["sampler"].weights.numpy() if "sampler" in order else np.ones(len(goals))
+    right = np.concatenate([part.flags["junction"] for part in parts]) & (goals.numpy().reshape(-1) > 0.5)
+    draw = draw * np.where(right, k, 1.0)
+    return dict(sampler=WeightedRandomSampler(torch.from_numpy(draw), len(draw), replacement=True, generator=gen))
+
+
 def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs: int = 20, batch: int = 256,
-               lr: float = 1e-4, junction_weight: float = 1.0, obstacle_weight: float = 1.0, cache: str = "",
-               threads: int = 0, seed: int = 0, keep_epochs: bool = False, force: bool = False,
-               log=print) -> dict:
+               lr: float = 1e-4, junction_weight: float = 1.0, obstacle_weight: float = 1.0,
+               right_turn_weight: float = 1.0, cache: str = "",
+               threads: int = 0, seed: int = 0, keep_epochs: bool = False, last: bool = False,
+               force: bool = False, log=print) -> dict:
     if epochs < 1 or batch < 1 or not lr > 0:
         raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
     weights = {"junction": junction_weight, "obstacle": obstacle_weight}
-    for column, k in weights.items():
+    for column, k in dict(weights, right_turn=right_turn_weight).items():
         if not k >= 1.0:
-            raise TrainError("--%s-weight must be >= 1, got %g" % (column, k))
+            raise TrainError("--%s-weight must be >= 1, got %g" % (column.replace("_", "-"), k))
     try:
         model = load_model(init)
         saved = torch.load(init, map_location="cpu")["settings"]
@@ -115,7 +132,7 @@ def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs:
     settings = dict(saved, train=[os.path.abspath(d) for d in train_dirs], val=os.path.abspath(val_dir),
                     epochs=epochs, batch=batch, lr=lr, init=os.path.abspath(init), head_only=True, seed=seed,
                     threads=threads)
-    for column, k in weights.items():
+    for column, k in dict(weights, right_turn=right_turn_weight).items():
         settings.pop(column + "_weight", None)
         if k != 1.0:
             settings[column + "_weight"] = k
@@ -140,6 +157,8 @@ def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs:
     gen = torch.Generator()
     gen.manual_seed(seed)
     order = _order(parts, train_dirs, weights, gen)
+    if right_turn_weight != 1.0:
+        order = _right_turns(order, parts, train_dirs, goals, right_turn_weight, gen)
     opt = torch.optim.Adam(list(model.fc1.parameters()) + list(model.fc2.parameters()), lr=lr)
     best, best_epoch = _loss(model, val_features, val_goals, val_targets, use_goal), 0
     best_state, history = copy.deepcopy(model.state_dict()), []
@@ -169,8 +188,11 @@ def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs:
             best, best_epoch, best_state = val_loss, epoch, copy.deepcopy(model.state_dict())
         log("epoch %d/%d: train %.5f  val %.5f%s  %.1f s" % (epoch, epochs, total / len(index), val_loss,
                                                          " (best)" if improved else "", seconds))
+    if last:  # chosen in closed loop: the validation loss mixes in the ±4 m views the car never drives
+        best, best_epoch, best_state = history[-1]["val_loss"], epochs, copy.deepcopy(model.state_dict())
     meta = _write(out, model, best_state, settings, history, best_epoch, best, epochs, finished=True)
-    log("best epoch %d (val %.5f; 0 is the init model); wrote %s" % (best_epoch, best, out))
+    log("%s epoch %d (val %.5f; 0 is the init model); wrote %s"
+        % ("last" if last else "best", best_epoch, best, out))
     return meta
 
 
@@ -187,16 +209,21 @@ def main(argv: Optional[List[str]] = None) -> int:
                    help="draw samples at junctions (relabel's junction column) this many times as often")
     p.add_argument("--obstacle-weight", type=float, default=1.0,
                    help="draw samples passing an obstacle (relabel's obstacle column) this many times as often")
+    p.add_argument("--right-turn-weight", type=float, default=1.0,
+                   help="draw junction samples whose goal is a right turn (+1) this many times as often again")
     p.add_argument("--cache", default="", help="folder keeping each dataset's features for the next run")
     p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--keep-epochs", action="store_true", help="also write every epoch's OUT/epochs/NN.pt")
+    p.add_argument("--last", action="store_true",
+                   help="model.pt/onnx from the last epoch, not the one of lowest validation loss")
     p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
     a = p.parse_args(argv)
     try:
         train_head(a.init, a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr,
-                   junction_weight=a.junction_weight, obstacle_weight=a.obstacle_weight, cache=a.cache,
-                   threads=a.threads, seed=a.seed, keep_epochs=a.keep_epochs, force=a.force,
+                   junction_weight=a.junction_weight, obstacle_weight=a.obstacle_weight,
+                   right_turn_weight=a.right_turn_weight, cache=a.cache,
+                   threads=a.threads, seed=a.seed, keep_epochs=a.keep_epochs, last=a.last, force=a.force,
                    log=lambda m: print(m, flush=True))
     except TrainError as e:
         print("error: %s" % e, file=sys.stderr)
