@@ -21,7 +21,6 @@ model.pt of `train`.
 import argparse
 import copy
 import hashlib
-import math
 import os
 import sys
 import time
@@ -32,7 +31,7 @@ import torch
 from torch.utils.data import DataLoader, Dataset, WeightedRandomSampler
 
 from sim4cv.driving_train import (DrivingDataset, TrainError, _check_out, _order, _save, _write,
-                                  load_model)
+                                  add_shared_arguments, load_model, refusing)
 
 # what makes two head models different (a rerun with other ones is refused unless --force)
 HEAD_SETTINGS = ("train", "val", "epochs", "batch", "lr", "init", "junction_weight", "obstacle_weight",
@@ -199,36 +198,21 @@ def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs:
 def main(argv: Optional[List[str]] = None) -> int:
     p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving head", description=__doc__.split("\n\n")[0])
     p.add_argument("--init", required=True, help="the trained model.pt whose convolutions are kept")
-    p.add_argument("--train", required=True, nargs="+", help="training dataset folder(s) (each holds labels.csv)")
-    p.add_argument("--val", required=True, help="validation dataset folder (holds labels.csv)")
-    p.add_argument("--out", required=True, help="output folder")
+    add_shared_arguments(p)
     p.add_argument("--epochs", type=int, default=20)
     p.add_argument("--batch", type=int, default=256)
     p.add_argument("--lr", type=float, default=1e-4)
-    p.add_argument("--junction-weight", type=float, default=1.0,
-                   help="draw samples at junctions (relabel's junction column) this many times as often")
-    p.add_argument("--obstacle-weight", type=float, default=1.0,
-                   help="draw samples passing an obstacle (relabel's obstacle column) this many times as often")
     p.add_argument("--right-turn-weight", type=float, default=1.0,
                    help="draw junction samples whose goal is a right turn (+1) this many times as often again")
     p.add_argument("--cache", default="", help="folder keeping each dataset's features for the next run")
-    p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--keep-epochs", action="store_true", help="also write every epoch's OUT/epochs/NN.pt")
     p.add_argument("--last", action="store_true",
                    help="model.pt/onnx from the last epoch, not the one of lowest validation loss")
-    p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
     a = p.parse_args(argv)
-    try:
-        train_head(a.init, a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr,
-                   junction_weight=a.junction_weight, obstacle_weight=a.obstacle_weight,
-                   right_turn_weight=a.right_turn_weight, cache=a.cache,
-                   threads=a.threads, seed=a.seed, keep_epochs=a.keep_epochs, last=a.last, force=a.force,
-                   log=lambda m: print(m, flush=True))
-    except TrainError as e:
-        print("error: %s" % e, file=sys.stderr)
-        return 2
-    return 0
+    return refusing(lambda: train_head(
+        a.init, a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, junction_weight=a.junction_weight,
+        obstacle_weight=a.obstacle_weight, right_turn_weight=a.right_turn_weight, cache=a.cache,
+        threads=a.threads, seed=a.seed, keep_epochs=a.keep_epochs, last=a.last, force=a.force,
+        log=lambda m: print(m, flush=True)))
 
 
 if __name__ == "__main__":

@@ -298,11 +298,35 @@ def load_model(path: str) -> WaypointNet:
     return model.eval()
 
 
-def main(argv: Optional[List[str]] = None) -> int:
-    p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving_train", description=__doc__.split("\n\n")[0])
+def add_shared_arguments(p: argparse.ArgumentParser) -> None:
+    """The options `train` and `head` share: the data, the output, the oversampling, the run."""
     p.add_argument("--train", required=True, nargs="+", help="training dataset folder(s) (each holds labels.csv)")
     p.add_argument("--val", required=True, help="validation dataset folder (holds labels.csv)")
     p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--junction-weight", type=float, default=1.0,
+                   help="draw samples at junctions (relabel's junction column) this many times as often")
+    p.add_argument("--obstacle-weight", type=float, default=1.0,
+                   help="draw samples passing an obstacle (relabel's obstacle column) this many times as often")
+    p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--keep-epochs", action="store_true",
+                   help="also write every epoch's weights to OUT/epochs/NN.pt (to choose by closed loop or average)")
+    p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
+
+
+def refusing(run) -> int:
+    """run(), with a TrainError as the command's refusal: its message, exit status 2."""
+    try:
+        run()
+    except TrainError as e:
+        print("error: %s" % e, file=sys.stderr)
+        return 2
+    return 0
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    p = argparse.ArgumentParser(prog="python3 -m sim4cv.driving_train", description=__doc__.split("\n\n")[0])
+    add_shared_arguments(p)
     p.add_argument("--epochs", type=int, default=50)
     p.add_argument("--batch", type=int, default=32)
     p.add_argument("--lr", type=float, default=5e-5)
@@ -310,29 +334,15 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--downscale", type=int, default=2, choices=(1, 2), help="2: train at 90x160")
     p.add_argument("--goal", action="store_true", help="feed labels.csv's goal column to the model")
     p.add_argument("--max-samples", type=int, default=0, help="rows of each labels.csv at most (0: all)")
-    p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-minutes", type=float, default=0.0,
                    help="stop after the epoch that passes this much training time (0: no limit)")
     p.add_argument("--init", default="", help="start from this model.pt's weights instead of random ones")
-    p.add_argument("--force", action="store_true", help="overwrite a model trained with other settings")
-    p.add_argument("--junction-weight", type=float, default=1.0,
-                   help="draw samples at junctions (relabel's junction column) this many times as often")
-    p.add_argument("--obstacle-weight", type=float, default=1.0,
-                   help="draw samples passing an obstacle (relabel's obstacle column) this many times as often")
-    p.add_argument("--keep-epochs", action="store_true",
-                   help="also write every epoch's weights to OUT/epochs/NN.pt (to choose by closed loop or average)")
     a = p.parse_args(argv)
-    try:
-        train(a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience,
-              downscale=a.downscale, goal=a.goal, max_samples=a.max_samples, threads=a.threads,
-              force=a.force, seed=a.seed, max_minutes=a.max_minutes, init=a.init,
-              junction_weight=a.junction_weight, obstacle_weight=a.obstacle_weight, keep_epochs=a.keep_epochs,
-              log=lambda m: print(m, flush=True))
-    except TrainError as e:
-        print("error: %s" % e, file=sys.stderr)
-        return 2
-    return 0
+    return refusing(lambda: train(
+        a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience, downscale=a.downscale,
+        goal=a.goal, max_samples=a.max_samples, threads=a.threads, force=a.force, seed=a.seed,
+        max_minutes=a.max_minutes, init=a.init, junction_weight=a.junction_weight,
+        obstacle_weight=a.obstacle_weight, keep_epochs=a.keep_epochs, log=lambda m: print(m, flush=True)))
 
 
 if __name__ == "__main__":
