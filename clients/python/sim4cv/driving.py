@@ -136,6 +136,11 @@ def human_main(argv: List[str]) -> int:
     return 0
 
 
+def generate_main(argv: List[str]) -> int:
+    from . import driving_dataset  # its command line holds generate among others
+    return driving_dataset.main(["generate"] + argv)
+
+
 # the commands that are a module's main(argv), one line each
 MODULES = {"train": "driving_train", "relabel": "driving_relabel", "dagger": "driving_dagger",
            "average": "driving_average", "probe": "driving_probe", "compare": "driving_compare",
@@ -144,16 +149,13 @@ MODULES = {"train": "driving_train", "relabel": "driving_relabel", "dagger": "dr
 
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    local = {"evaluate": evaluate_main, "drive": drive_main, "human": human_main}
-    if not argv or argv[0] not in set(MODULES) | set(local) | {"generate"}:
+    local = {"evaluate": evaluate_main, "drive": drive_main, "human": human_main, "generate": generate_main}
+    if not argv or argv[0] not in set(MODULES) | set(local):
         print(__doc__, file=sys.stderr)
         return 2
     command, rest = argv[0], argv[1:]
     if command in local:
         return local[command](rest)
-    if command == "generate":
-        from . import driving_dataset
-        return driving_dataset.main(["generate"] + rest)
     return importlib.import_module("." + MODULES[command], __package__).main(rest)
 
 

@@ -21,7 +21,9 @@ model.pt of `train`.
 import argparse
 import copy
 import hashlib
+import io
 import os
+import pickle
 import sys
 import time
 from typing import List, Optional
@@ -31,7 +33,7 @@ import torch
 from torch.utils.data import DataLoader, Dataset, WeightedRandomSampler
 
 from sim4cv.driving_train import (DrivingDataset, TrainError, _check_out, _order, _save, _write,
-                                  add_shared_arguments, load_model, refusing)
+                                  add_shared_arguments, check_run, model_from, record_weights, refusing)
 
 # what makes two head models different (a rerun with other ones is refused unless --force)
 HEAD_SETTINGS = ("train", "val", "epochs", "batch", "lr", "init", "junction_weight", "obstacle_weight",
@@ -49,14 +51,6 @@ class _Images(Dataset):
 
     def __getitem__(self, i):
         return torch.from_numpy(self.part._read(i)).float()
-
-
-def _digest(path: str) -> str:
-    h = hashlib.sha1()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def encode(model, part: DrivingDataset, cache: str, model_digest: str, log=print) -> torch.Tensor:
@@ -116,25 +110,20 @@ def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs:
                right_turn_weight: float = 1.0, cache: str = "",
                threads: int = 0, seed: int = 0, keep_epochs: bool = False, last: bool = False,
                force: bool = False, log=print) -> dict:
-    if epochs < 1 or batch < 1 or not lr > 0:
-        raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
     weights = {"junction": junction_weight, "obstacle": obstacle_weight}
-    for column, k in dict(weights, right_turn=right_turn_weight).items():
-        if not k >= 1.0:
-            raise TrainError("--%s-weight must be >= 1, got %g" % (column.replace("_", "-"), k))
+    check_run(epochs, batch, lr, dict(weights, right_turn=right_turn_weight))
     try:
-        model = load_model(init)
-        saved = torch.load(init, map_location="cpu")["settings"]
-    except (OSError, KeyError, RuntimeError, EOFError) as e:
+        with open(init, "rb") as f:
+            data = f.read()  # read once: loaded, and its digest keys the feature cache
+        stored = torch.load(io.BytesIO(data), map_location="cpu")
+        model, saved = model_from(stored), stored["settings"]
+    except (OSError, KeyError, RuntimeError, EOFError, pickle.UnpicklingError) as e:
         raise TrainError("--init %s: not a model.pt of `train` (%s)" % (init, e))
     downscale = saved.get("downscale", 2)
     settings = dict(saved, train=[os.path.abspath(d) for d in train_dirs], val=os.path.abspath(val_dir),
                     epochs=epochs, batch=batch, lr=lr, init=os.path.abspath(init), head_only=True, seed=seed,
                     threads=threads)
-    for column, k in dict(weights, right_turn=right_turn_weight).items():
-        settings.pop(column + "_weight", None)
-        if k != 1.0:
-            settings[column + "_weight"] = k
+    record_weights(settings, dict(weights, right_turn=right_turn_weight))
     parts = [DrivingDataset(d, downscale) for d in train_dirs]
     val = DrivingDataset(val_dir, downscale)
     if (parts[0].height, parts[0].width) != (model.height, model.width):
@@ -145,7 +134,7 @@ def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs:
     if threads > 0:
         torch.set_num_threads(threads)
     torch.manual_seed(seed)
-    digest = _digest(init)
+    digest = hashlib.sha1(data).hexdigest()
     features = torch.cat([encode(model, p, cache, digest, log) for p in parts])
     goals = torch.from_numpy(np.concatenate([p.goals for p in parts]))
     targets = torch.from_numpy(np.concatenate([p.targets for p in parts]))

@@ -142,6 +142,25 @@ def _order(parts, folders, weights: Dict[str, float], gen) -> dict:
     return dict(sampler=WeightedRandomSampler(torch.from_numpy(draw), len(draw), replacement=True, generator=gen))
 
 
+def check_run(epochs: int, batch: int, lr: float, weights: Dict[str, float]) -> None:
+    """The refusals of a run's numbers: epochs, batch, learning rate, and each
+    oversampling weight (`weights`: column -> K, e.g. junction -> 3)."""
+    if epochs < 1 or batch < 1 or not lr > 0:
+        raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
+    for column, k in weights.items():
+        if not k >= 1.0:
+            raise TrainError("--%s-weight must be >= 1, got %g" % (column.replace("_", "-"), k))
+
+
+def record_weights(settings: dict, weights: Dict[str, float]) -> None:
+    """The weights into `settings` as COLUMN_weight, only those in use (K != 1),
+    so older models' settings still match; an inherited entry is replaced."""
+    for column, k in weights.items():
+        settings.pop(column + "_weight", None)
+        if k != 1.0:
+            settings[column + "_weight"] = k
+
+
 def _check_out(out: str, settings: dict, force: bool, keys=MODEL_SETTINGS) -> None:
     path = os.path.join(out, "training.json")
     if os.path.exists(out) and not os.path.isdir(out):
@@ -168,21 +187,15 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
           log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
-    if epochs < 1 or batch < 1 or lr <= 0:
-        raise TrainError("--epochs and --batch must be >= 1 and --lr > 0")
     weights = {"junction": junction_weight, "obstacle": obstacle_weight}
-    for column, k in weights.items():
-        if not k >= 1.0:
-            raise TrainError("--%s-weight must be >= 1, got %g" % (column, k))
+    check_run(epochs, batch, lr, weights)
     train_dirs = [train_dir] if isinstance(train_dir, str) else list(train_dir)
     train_path = (os.path.abspath(train_dirs[0]) if len(train_dirs) == 1
                   else [os.path.abspath(d) for d in train_dirs])
     settings = dict(train=train_path, val=os.path.abspath(val_dir), epochs=epochs, batch=batch,
                     lr=lr, patience=patience, downscale=downscale, goal=goal, max_samples=max_samples,
                     threads=threads, seed=seed)
-    for column, k in weights.items():  # written only when used, so older models' settings still match
-        if k != 1.0:
-            settings[column + "_weight"] = k
+    record_weights(settings, weights)
     parts = [DrivingDataset(d, downscale, max_samples) for d in train_dirs]
     train_set = parts[0] if len(parts) == 1 else ConcatDataset(parts)
     train_set.height, train_set.width = parts[0].height, parts[0].width
@@ -291,7 +304,11 @@ def _save(path: str, state, settings: dict, epoch: int) -> None:
 
 def load_model(path: str) -> WaypointNet:
     """Loads OUT/model.pt back into a WaypointNet (eval mode)."""
-    saved = torch.load(path, map_location="cpu")
+    return model_from(torch.load(path, map_location="cpu"))
+
+
+def model_from(saved: dict) -> WaypointNet:
+    """The WaypointNet (eval mode) of a loaded model.pt's contents."""
     s = saved["settings"]
     model = WaypointNet(s["height"], s["width"], use_goal=s["goal"])
     model.load_state_dict(saved["state_dict"])
