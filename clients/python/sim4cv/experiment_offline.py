@@ -41,6 +41,15 @@ def sequences_dir(exp, out_dir, jobs, say):
     return root
 
 
+# Run in every offline study beside the trackers asked for: the ceiling (gt) and
+# what doing nothing scores (the baselines), so every table shows the range.
+REFERENCE_TRACKERS = ("gt", "baseline:static", "baseline:centre")
+
+
+def with_references(trackers):
+    return list(trackers) + [t for t in REFERENCE_TRACKERS if t not in trackers]
+
+
 def list_sequences(root):
     return sorted(d for d in os.listdir(root) if os.path.isfile(os.path.join(root, d, "groundtruth_rect.txt")))
 
@@ -123,8 +132,9 @@ def run_offline(exp, out_dir, jobs, progress_class):
     if not seqs:
         raise SystemExit("sim4cv.experiment: error: no sequences (folders with groundtruth_rect.txt) in %s" % root)
     results_dir = os.path.join(out_dir, "results")
+    trackers = with_references(exp["trackers"])
     work = [(spec, sanitise(spec), seq, os.path.join(root, seq),
-             os.path.join(results_dir, sanitise(spec), seq + ".txt")) for spec in exp["trackers"] for seq in seqs]
+             os.path.join(results_dir, sanitise(spec), seq + ".txt")) for spec in trackers for seq in seqs]
     progress = progress_class(len(work), jobs, "(tracker, sequence) pairs")
     records = []
     context = multiprocessing.get_context("spawn")
@@ -136,7 +146,7 @@ def run_offline(exp, out_dir, jobs, progress_class):
                             else math.nan, "error": error})
     ope_dir = os.path.join(out_dir, "ope")
     os.makedirs(ope_dir, exist_ok=True)
-    names = [sanitise(t) for t in exp["trackers"] if os.path.isdir(os.path.join(results_dir, sanitise(t)))]
+    names = [sanitise(t) for t in trackers if os.path.isdir(os.path.join(results_dir, sanitise(t)))]
     report = ope.evaluate(root, results_dir, exp["convention"], trackers=names)
     try:
         from . import ope_plots

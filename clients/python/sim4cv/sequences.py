@@ -50,6 +50,9 @@ EXTRA_CHANNELS = ("depth", "mask", "semantic", "normals", "flow")
 CONDITIONS = ("clear_noon", "clear_morning", "overcast", "fog", "dusk", "night", "rain")
 JPEG_QUALITY = 95
 PIPELINE_STEPS = 4  # lockstep Steps kept outstanding, so rendering overlaps our JPEG encoding
+# pilot: sim4cv.pilot flies a world-fixed camera (the default); servo: the map's UAV follows the car
+CAMERA_MOTIONS = ("pilot", "servo")
+PILOT_CAMERA = "pilot"
 
 # The paper's offline set: 5 sequences from the two tracking maps (easy, hard) at
 # the three speeds, 3,300-12,700 frames each. Ours: whole laps of the route
@@ -109,7 +112,7 @@ class Spec:
     """One sequence to generate: frames > 0, or laps > 0 (then frames is a cap)."""
 
     def __init__(self, map_, speed, frames=0, laps=0, conditions=None, channels=(), seed=1, quality=None,
-                 traffic_cars=0, name=None):
+                 traffic_cars=0, name=None, camera_motion="pilot"):
         if (frames > 0) == (laps > 0):
             raise ValueError("give either frames or laps")
         self.map = map_name(map_)
@@ -122,12 +125,16 @@ class Spec:
         self.quality = quality
         self.traffic_cars = int(traffic_cars)
         self.name = name or sequence_name(self.map, self.speed, conditions)
+        if camera_motion not in CAMERA_MOTIONS:
+            raise ValueError("camera_motion must be one of %s, not %r" % (", ".join(CAMERA_MOTIONS), camera_motion))
+        self.camera_motion = camera_motion
 
     def settings(self):
         """What a complete sequence.json must match to be skipped on resume."""
         return {"map": self.map, "speed": self.speed, "requested_frames": self.frames,
                 "requested_laps": self.laps, "conditions_requested": self.conditions,
-                "channels": self.channels, "quality_requested": self.quality, "traffic_cars": self.traffic_cars}
+                "channels": self.channels, "quality_requested": self.quality, "traffic_cars": self.traffic_cars,
+                "camera_motion": self.camera_motion, "pilot_seed": self.seed}
 
 
 def paper_specs(conditions=None, channels=(), seed=1):
@@ -235,7 +242,7 @@ def _save_channel(seq_dir, channel, index, array):
 def _clear(seq_dir):
     for sub in ["img"] + list(EXTRA_CHANNELS):
         shutil.rmtree(os.path.join(seq_dir, sub), ignore_errors=True)
-    for name in ("groundtruth_rect.txt", "poses.csv", "measures.csv", "attributes.txt",
+    for name in ("groundtruth_rect.txt", "poses.csv", "measures.csv", "pilot.csv", "attributes.txt",
                  "attributes_per_frame.csv", "sequence.json"):
         path = os.path.join(seq_dir, name)
         if os.path.exists(path):
@@ -312,7 +319,16 @@ def generate_sequence(spec, out_root, daemon=None, frame_hook=None, log=None, pr
         _write_json(os.path.join(seq_dir, "sequence.json"), meta)
 
         # The mask is always subscribed (it costs little): the attributes' luma and BC use the target's pixels.
-        client.subscribe("uav", ["rgb", "boxes"] + spec.channels + ([] if "mask" in spec.channels else ["mask"]),
+        pilot, camera, pipeline = None, "uav", PIPELINE_STEPS
+        if spec.camera_motion == "pilot":
+            from .pilot import PILOT_HEADER, take_the_camera
+            pilot = take_the_camera(client, world, target.id, spec.seed, welcome.frame_hz, name=PILOT_CAMERA)
+            camera, pipeline = PILOT_CAMERA, 1  # each frame's pose depends on the frame before
+            meta.update(camera=camera, uav_id=None, pilot=pilot.description())
+            uav = None  # removed: the camera columns of poses.csv hold the piloted pose
+            _write_json(os.path.join(seq_dir, "sequence.json"), meta)
+        pilot_rows = []
+        client.subscribe(camera, ["rgb", "boxes"] + spec.channels + ([] if "mask" in spec.channels else ["mask"]),
                          "lockstep", with_state=True)
         cap = spec.frames if spec.frames else LAP_FRAME_CAP * spec.laps
         laps = LapCounter()
@@ -323,7 +339,7 @@ def generate_sequence(spec, out_root, daemon=None, frame_hook=None, log=None, pr
         index = 0
         intrinsics = None
         while index < cap:
-            while outstanding < min(PIPELINE_STEPS, cap - index):
+            while outstanding < min(pipeline, cap - index):
                 client.step()
                 outstanding += 1
             frame = client.receive_frame(timeout=60.0)
@@ -367,8 +383,12 @@ def generate_sequence(spec, out_root, daemon=None, frame_hook=None, log=None, pr
                       if b.object_id != target.id and b.object_class == target_class]
             sob = attrs.similar_object_distance(tbox, others)
             measures.append([index, 1 if obj is not None or box else 0] + list(proj) + [luma, similarity, sob])
+            if pilot is not None:
+                pilot_rows.append([index] + pilot.record())
             if spec.laps and car and laps.update(cpos[0], cpos[1], yaw) >= spec.laps:
                 break
+            if pilot is not None and index < cap:
+                client.set_camera_pose(camera, *pilot.step(cpos, yaw))
             if frame_hook:
                 frame_hook(client, index, frame)
             now = time.monotonic()
@@ -391,6 +411,8 @@ def generate_sequence(spec, out_root, daemon=None, frame_hook=None, log=None, pr
         f.write("\n".join(gt_lines) + "\n")
     _write_csv(os.path.join(seq_dir, "poses.csv"), POSES_HEADER, poses)
     _write_csv(os.path.join(seq_dir, "measures.csv"), MEASURES_HEADER, measures)
+    if pilot is not None:
+        _write_csv(os.path.join(seq_dir, "pilot.csv"), ["frame"] + PILOT_HEADER, pilot_rows)
     meta.update({"frames": index, "laps_completed": laps.laps if spec.laps else None,
                  "camera_intrinsics": intrinsics, "image_size": [intrinsics["width"], intrinsics["height"]],
                  "generation_seconds": round(elapsed, 3), "images_per_second": round(index / max(elapsed, 1e-9), 2),

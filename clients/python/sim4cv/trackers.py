@@ -2,6 +2,7 @@
 takes one (the command line, experiment files; docs/tracking.md).
 
     gt                      the ground truth: each frame's true box of the target
+    baseline:static         the first box forever; baseline:centre: the first box's size at the image centre
     opencv:NAME             an OpenCV 4.6 tracker: MOSSE, KCF, CSRT, MIL, MedianFlow, TLD, Boosting
     trax:COMMAND LINE       any TraX tracker process (sim4cv.trax; every VOT tracker)
     python:MODULE:FACTORY   FACTORY() from MODULE: an object with init(image, box) and update(image) -> box
@@ -81,6 +82,36 @@ class GroundTruthTracker(Tracker):
         if box is None or box.visibility <= 0:
             return None
         return (float(box.x), float(box.y), float(box.width), float(box.height))
+
+
+class StaticBaseline(Tracker):
+    """`baseline:static`: the first box, forever. A benchmark in which doing
+    nothing scores well does not measure tracking; this shows how well."""
+
+    name = "baseline:static"
+
+    def _init(self, image, box, frame):
+        self._box = box
+
+    def _update(self, image, frame):
+        return self._box
+
+
+class CentreBaseline(Tracker):
+    """`baseline:centre`: the first box's size, centred in the image: what a
+    camera that always centres its target would give for free."""
+
+    name = "baseline:centre"
+
+    def _init(self, image, box, frame):
+        self._size = box[2], box[3]
+
+    def _update(self, image, frame):
+        (w, h), (rows, cols) = self._size, image.shape[:2]
+        return ((cols - w) / 2.0, (rows - h) / 2.0, w, h)
+
+
+BASELINES = {"baseline:static": StaticBaseline, "baseline:centre": CentreBaseline}
 
 
 class OpenCvTracker(Tracker):
@@ -174,6 +205,8 @@ def make_tracker(spec: str, target_id: int = 0, timeout: float = 30.0) -> Tracke
     spec = spec.strip()
     if spec == "gt":
         return GroundTruthTracker(target_id)
+    if spec in BASELINES:
+        return BASELINES[spec]()
     kind, _, rest = spec.partition(":")
     if kind == "opencv" and rest:
         return OpenCvTracker(rest)
@@ -182,5 +215,5 @@ def make_tracker(spec: str, target_id: int = 0, timeout: float = 30.0) -> Tracke
         return PythonTracker(module, factory)
     if kind in ("trax", "octave") and rest.strip():
         return TraxTrackerAdapter(spec, timeout)
-    raise ValueError("tracker specification %r is none of: gt, opencv:NAME, trax:COMMAND LINE, "
+    raise ValueError("tracker specification %r is none of: gt, baseline:static, baseline:centre, opencv:NAME, trax:COMMAND LINE, "
                      "python:MODULE:FACTORY, octave:FILE.m" % (spec,))
