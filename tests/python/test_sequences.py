@@ -259,7 +259,7 @@ def test_generate_resume_and_ope(tmp_path, start_daemon):
         if index == 1:
             client.uav_velocity(2, 0.0, 0.0, 0.0, yaw_rate_deg=180.0)
 
-    spec = S.Spec("hard_urban", 6, frames=S_SPIN_FRAMES, name="hard_urban_s6_spin")
+    spec = S.Spec("hard_urban", 6, frames=S_SPIN_FRAMES, name="hard_urban_s6_spin", camera_motion="servo")
     got = S.generate_sequence(spec, out, daemon="tcp://127.0.0.1:%d" % daemon.port, frame_hook=spin,
                               log=lambda text: None)
     assert got["daemon"].startswith("tcp://") and got["seed"] is None and got["map_name"] == "tracking_hard_urban"

@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+MODEL = "sim4cv.pilot 1"  # sim4cv.sequences.PILOT_MODEL: a sequence made by another model is made again
 MANOEUVRES = ("follow", "orbit", "flyby", "climb", "reframe", "look_away")
 
 
@@ -36,7 +37,7 @@ class PilotSettings:
     max_speed: float = 15.0            # m/s, horizontal
     max_accel: float = 3.5             # m/s^2, horizontal
     max_climb: float = 3.0             # m/s
-    max_yaw_rate: float = 50.0         # deg/s
+    max_yaw_rate: float = 40.0         # deg/s
     max_pitch_rate: float = 30.0       # deg/s, the gimbal
     reaction_s: tuple = (0.25, 0.6)    # the pilot's lag, drawn per sequence
     altitude: tuple = (9.0, 32.0)      # m above the target
@@ -48,7 +49,7 @@ class PilotSettings:
     gust_speed: tuple = (2.0, 5.0)     # m/s
     gust_s: tuple = (0.7, 2.0)         # s
     # manoeuvre weights, in MANOEUVRES' order
-    weights: tuple = (0.24, 0.2, 0.14, 0.14, 0.24, 0.04)
+    weights: tuple = (0.28, 0.2, 0.14, 0.15, 0.2, 0.03)
     steady_start_s: float = 1.5        # the first seconds: plain follow, target centred
 
 
@@ -98,19 +99,21 @@ class Pilot:
         if start:
             return m
         # the framing every manoeuvre carries: a pilot rarely centres exactly
-        m["aim_yaw"] = float(rng.normal(0, 0.25)) * self.half_fov_x
-        m["aim_pitch"] = float(rng.normal(0, 0.25)) * self.half_fov_y
+        m["aim_yaw"] = float(rng.normal(0, 0.15)) * self.half_fov_x
+        m["aim_pitch"] = float(rng.normal(0, 0.15)) * self.half_fov_y
         if kind in ("follow", "climb", "reframe"):
             m["bearing"] = math.pi + float(rng.uniform(-0.9, 0.9))
         if kind == "climb":
             m["altitude"] = _uniform(rng, s.altitude)
             m["distance"] = _uniform(rng, s.distance)
         elif kind == "orbit":
-            m["rate"] = float(rng.choice([-1, 1])) * math.radians(_uniform(rng, (12, 35)))
+            m["altitude"] = _uniform(rng, s.altitude)
+            m["rate"] = float(rng.choice([-1, 1])) * math.radians(_uniform(rng, (10, 25)))
             m["distance"] = _uniform(rng, (s.distance[0] + 3, s.distance[1]))
             m["bearing"] = None  # starts from where the drone is
         elif kind == "flyby":
             # hold a point beside the target's path ahead; it passes under the camera
+            m["altitude"] = _uniform(rng, s.altitude)
             ahead = _uniform(rng, (8, 25))
             side = float(rng.choice([-1, 1])) * _uniform(rng, (4, 14))
             c, sn = math.cos(target_yaw), math.sin(target_yaw)
@@ -222,7 +225,7 @@ class Pilot:
 
     def description(self):
         """What sequence.json records so a reader knows how the camera flew."""
-        return {"model": "sim4cv.pilot 1", "seed": self.seed, "reaction_s": round(self.reaction_s, 4),
+        return {"model": MODEL, "seed": self.seed, "reaction_s": round(self.reaction_s, 4),
                 "settings": asdict(self.settings)}
 
 

@@ -6,6 +6,9 @@ exact ground truth and automatic attributes (sim4cv.attributes).
                                          [--channels depth,mask] [--daemon ADDRESS] [--jobs J]
     python3 -m sim4cv.sequences attributes --out DIR     # recompute the attribute files from the folders
     python3 -m sim4cv.sequences maps                     # the shipped tracking maps
+    python3 -m sim4cv.sequences stats DIR [--json F]     # camera-motion statistics (sim4cv.sequence_stats)
+    python3 -m sim4cv.sequences export DIR --format uav123|got10k|otb --out OUT   (sim4cv.sequence_export)
+    python3 -m sim4cv.sequences export-results RESULTS --layout got10k|pytracking --out OUT
 
 For each (map, speed) the tool starts its own sim4cvd (`--map
 scenes/tracking/<name>.map --car-speed S --mode lockstep`; $SIM4CVD or
@@ -37,11 +40,13 @@ import os
 import shutil
 import sys
 import time
+import zlib
 
 import numpy as np
 
 from . import attributes as attrs
 from .daemon import REPO_ROOT, OwnDaemon
+from .pilot import MODEL as PILOT_MODEL
 
 MAPS_DIR = os.path.join(REPO_ROOT, "scenes")
 TRACKING_MAPS = ["tracking/easy_desert", "tracking/easy_urban", "tracking/hard_desert", "tracking/hard_urban"]
@@ -134,7 +139,8 @@ class Spec:
         return {"map": self.map, "speed": self.speed, "requested_frames": self.frames,
                 "requested_laps": self.laps, "conditions_requested": self.conditions,
                 "channels": self.channels, "quality_requested": self.quality, "traffic_cars": self.traffic_cars,
-                "camera_motion": self.camera_motion, "pilot_seed": self.seed}
+                "camera_motion": self.camera_motion,
+                "pilot_model": PILOT_MODEL if self.camera_motion == "pilot" else None}
 
 
 def paper_specs(conditions=None, channels=(), seed=1):
@@ -322,7 +328,9 @@ def generate_sequence(spec, out_root, daemon=None, frame_hook=None, log=None, pr
         pilot, camera, pipeline = None, "uav", PIPELINE_STEPS
         if spec.camera_motion == "pilot":
             from .pilot import PILOT_HEADER, take_the_camera
-            pilot = take_the_camera(client, world, target.id, spec.seed, welcome.frame_hz, name=PILOT_CAMERA)
+            # one seed per (seed, sequence): the sequences of a set are flown differently, each the same every time
+            pilot_seed = zlib.crc32(("%d:%s" % (spec.seed, spec.name)).encode())
+            pilot = take_the_camera(client, world, target.id, pilot_seed, welcome.frame_hz, name=PILOT_CAMERA)
             camera, pipeline = PILOT_CAMERA, 1  # each frame's pose depends on the frame before
             meta.update(camera=camera, uav_id=None, pilot=pilot.description())
             uav = None  # removed: the camera columns of poses.csv hold the piloted pose
@@ -496,13 +504,27 @@ def parse_args(argv):
     g.add_argument("--channels", default="", help="extra channels saved per frame: %s" % ",".join(EXTRA_CHANNELS))
     g.add_argument("--quality", choices=("full", "fast"), help="render quality (default: the daemon's, full)")
     g.add_argument("--traffic-cars", type=int, default=0, help="other cars driving on the map (SOB)")
-    g.add_argument("--seed", type=int, default=1, help="the daemon's --seed (own daemons only; default 1)")
+    g.add_argument("--seed", type=int, default=1, help="the daemon's --seed (own daemons) and the pilot's (default 1)")
+    g.add_argument("--camera-motion", choices=CAMERA_MOTIONS, default="pilot",
+                   help="pilot (default): sim4cv.pilot flies the camera; servo: the map's UAV follows the car")
     g.add_argument("--daemon", help="ADDRESS (tcp://HOST:PORT) of a running lockstep sim4cvd to use instead of "
                                     "starting one per sequence; it loads each map")
     g.add_argument("--jobs", type=int, default=1, help="sequences generated at once, each with its own daemon")
     a = sub.add_parser("attributes", help="recompute the attribute files of generated sequences")
     a.add_argument("--out", required=True)
     sub.add_parser("maps", help="list the shipped tracking maps")
+    st = sub.add_parser("stats", help="camera-motion statistics of a sequence set (sim4cv.sequence_stats)")
+    st.add_argument("dir")
+    st.add_argument("--json", help="also write the statistics (with per-sequence figures) to this file")
+    e = sub.add_parser("export", help="the sequences in UAV123's, GOT-10k's or OTB's layout (1-based boxes)")
+    e.add_argument("dir")
+    e.add_argument("--format", required=True, choices=("uav123", "got10k", "otb"))
+    e.add_argument("--out", required=True)
+    r = sub.add_parser("export-results", help="tracker results (RESULTS/<tracker>/<seq>.txt) in got10k's or "
+                                              "pytracking's layout (1-based boxes, time files)")
+    r.add_argument("results")
+    r.add_argument("--layout", required=True, choices=("got10k", "pytracking"))
+    r.add_argument("--out", required=True)
     return p, p.parse_args(argv)
 
 
@@ -516,7 +538,7 @@ def specs_from_args(p, args):
             p.error("--preset paper fixes the maps, speeds and lengths")
         specs = paper_specs(args.conditions, channels, args.seed)
         for s in specs:
-            s.quality, s.traffic_cars = args.quality, args.traffic_cars
+            s.quality, s.traffic_cars, s.camera_motion = args.quality, args.traffic_cars, args.camera_motion
         return specs
     maps = [map_name(m) for m in _csv_list(args.maps)] if args.maps else shipped_tracking_maps()
     for m in maps:
@@ -532,7 +554,28 @@ def specs_from_args(p, args):
         p.error("--frames / --laps must be at least 1")
     frames, laps = (args.frames, 0) if args.frames else (0, args.laps or 1)
     return [Spec(m, s, frames=frames, laps=laps, conditions=args.conditions, channels=channels, seed=args.seed,
-                 quality=args.quality, traffic_cars=args.traffic_cars) for m in maps for s in speeds]
+                 quality=args.quality, traffic_cars=args.traffic_cars, camera_motion=args.camera_motion)
+            for m in maps for s in speeds]
+
+
+def _inspect_or_export(args):
+    from . import sequence_export, sequence_stats
+    try:
+        if args.command == "stats":
+            stats = sequence_stats.set_statistics(args.dir)
+            print(sequence_stats.markdown(stats))
+            if args.json:
+                _write_json(args.json, stats)
+        elif args.command == "export":
+            sequence_export.export(args.dir, args.format, args.out)
+            print("wrote %s (%s layout)" % (args.out, args.format))
+        else:
+            names = sequence_export.export_results(args.results, args.layout, args.out)
+            print("wrote %s (%s layout): %s" % (args.out, args.layout, ", ".join(names)))
+    except (sequence_export.ExportError, OSError, ValueError, KeyError) as e:
+        print("sim4cv.sequences: error: %s" % e, file=sys.stderr)
+        return 1
+    return 0
 
 
 def main(argv=None):
@@ -544,6 +587,8 @@ def main(argv=None):
     if args.command == "attributes":
         recompute_attributes(args.out)
         return 0
+    if args.command in ("stats", "export", "export-results"):
+        return _inspect_or_export(args)
     specs = specs_from_args(p, args)
     if args.jobs < 1:
         p.error("--jobs must be at least 1")
