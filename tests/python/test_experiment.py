@@ -113,12 +113,14 @@ def test_smoke_offline(tmp_path):
     lines = (out / "results" / "opencv_kcf" / "easy_urban_s8.txt").read_text().splitlines()
     assert len(lines) == 40 and len(lines[0].split(",")) == 4
     ope = json.loads((out / "ope" / "ope.json").read_text())
-    assert set(ope["trackers"]) == {"gt", "opencv_kcf"}
+    # gt and the baselines are run in every offline study, beside the trackers asked for
+    assert set(ope["trackers"]) == {"gt", "opencv_kcf", "baseline_static", "baseline_centre"}
     assert ope["trackers"]["gt"]["precision_20"] == 1.0
     assert ope["trackers"]["opencv_kcf"]["sequences"] == 2
     report = (out / "report.md").read_text()
     assert "success_auc" in report and "ope/success_overall.png" in report
+    assert "| baseline:static |" in report and "| sr_50 | sr_75 | ao | norm_precision_20 |" in report
     records = json.loads((out / "results.json").read_text())
-    assert len(records) == 4 and all(r["tracker_fps"] > 0 for r in records)
+    assert len(records) == 8 and all(r["tracker_fps"] > 0 and r["fps_per_frame"] > 0 for r in records)
     again = run_cli("experiments/smoke_offline.yaml", "--out", str(out), "--jobs", "1")
-    assert again.returncode == 0 and again.stderr.count("skipped (done before)") == 4
+    assert again.returncode == 0 and again.stderr.count("skipped (done before)") == 8

@@ -114,6 +114,16 @@ def _job(args):
     return spec, tracker_name, seq, frames, seconds, error, False, time.monotonic() - t0
 
 
+def _fps_per_frame(base):
+    """got10k's speed: the mean of 1/t over the lines of <seq>_time.txt with t > 0 (the init line included)."""
+    from .sequence_export import per_frame_fps
+    try:
+        with open(base + "_time.txt") as f:
+            return per_frame_fps([float(line) for line in f if line.strip()])
+    except (OSError, ValueError):
+        return math.nan
+
+
 def _read_times(result_path):
     try:
         with open(result_path[:-4] + "_time.txt") as f:
@@ -143,7 +153,8 @@ def run_offline(exp, out_dir, jobs, progress_class):
             progress.step("%s on %s" % (spec, seq), skipped, wall, " (error: %s)" % error if error else "")
             records.append({"kind": "offline", "tracker": spec, "tracker_dir": name, "sequence": seq,
                             "frames": frames, "tracker_fps": (frames - 1) / seconds if seconds and frames > 1
-                            else math.nan, "error": error})
+                            else math.nan, "fps_per_frame": _fps_per_frame(os.path.join(results_dir, name, seq)),
+                            "error": error})
     ope_dir = os.path.join(out_dir, "ope")
     os.makedirs(ope_dir, exist_ok=True)
     names = [sanitise(t) for t in trackers if os.path.isdir(os.path.join(results_dir, sanitise(t)))]

@@ -210,6 +210,10 @@ FORMATS = {"deviation_from_gt_m": "%.1f", "frames_processed": "%.0f", "frames_sk
            "speed": "%g", "fps": "%g", "delay_ms": "%g"}
 
 
+# the offline table's scores (sim4cv.ope): success AUC, P@20, SR0.5, SR0.75, AO, normalised precision at 0.2
+OPE_SCORES = ("success_auc", "precision_20", "sr_50", "sr_75", "ao", "norm_precision_20")
+
+
 def write_all(exp, records, out_dir, command, wall_s, ope_report=None):
     written = write_tables(records, out_dir)
     plots_dir = os.path.join(out_dir, "plots")
@@ -236,19 +240,29 @@ def write_all(exp, records, out_dir, command, wall_s, ope_report=None):
         lines += ["", "## Plots", ""] + ["![%s](plots/%s)" % (p, p) for p in plots + maps]
         written += ["plots/" + p for p in plots + maps]
     else:
+        from .experiment_offline import with_references
         rows = []
-        for spec in exp["trackers"]:
+        total = len((ope_report or {}).get("sequences", []))
+        for spec in with_references(exp["trackers"]):
             recs = [r for r in records if r["tracker"] == spec]
             t = (ope_report or {}).get("trackers", {}).get(recs[0]["tracker_dir"] if recs else "", {})
-            rows.append({"tracker": spec, "success_auc": t.get("success_auc", math.nan),
-                         "precision_20": t.get("precision_20", math.nan), "sequences": t.get("sequences", 0),
-                         "frames": sum(r["frames"] for r in recs),
+            rows.append({"tracker": spec, **{k: t.get(k, math.nan) for k in OPE_SCORES},
+                         "sequences": t.get("sequences", 0), "frames": sum(r["frames"] for r in recs),
                          "tracker_fps": _mean([r["tracker_fps"] for r in recs]),
+                         "fps_per_frame": _mean([r.get("fps_per_frame", math.nan) for r in recs]),
                          "errors": "; ".join(r["sequence"] + ": " + r["error"] for r in recs if r["error"])})
-        rows.sort(key=lambda r: -r["success_auc"] if not math.isnan(r["success_auc"]) else 1)
+        # a tracker scored on fewer sequences than the others is not ranked with them: it goes below, marked
+        for r in rows:
+            r["ranked"] = r["sequences"] == total and total > 0
+            if not r["ranked"]:
+                r["tracker"] += " (%d of %d sequences: not ranked)" % (r["sequences"], total)
+        rows.sort(key=lambda r: (not r["ranked"], -r["success_auc"] if not math.isnan(r["success_auc"]) else 1))
         lines += ["## OPE (%s convention; ope/ope.json)" % exp["convention"], ""] + _md_table(
-            ["tracker", "success_auc", "precision_20", "sequences", "frames", "tracker_fps"], rows,
-            dict(FORMATS, sequences="%d", frames="%d"))
+            ["tracker"] + list(OPE_SCORES) + ["sequences", "frames", "tracker_fps", "fps_per_frame"], rows,
+            dict(FORMATS, sequences="%d", frames="%d", fps_per_frame="%.0f"))
+        lines += ["", "tracker_fps: frames / summed update time; fps_per_frame: the mean of 1/t over the frames "
+                  "(got10k's speed). gt and the baselines are references: the ceiling and what doing nothing "
+                  "scores."]
         lines += ["", "Per sequence (results/<tracker>/<seq>.txt; fps from <seq>_time.txt):", ""] + _md_table(
             ["tracker", "sequence", "frames", "tracker_fps", "error"], records, FORMATS)
         plots = (ope_report or {}).get("plots", [])

@@ -58,10 +58,15 @@ import re
 
 import numpy as np
 
-CONVENTIONS = ("otb", "got10k")
+CONVENTIONS = ("otb", "got10k", "got10k_otb")
 SUCCESS_THRESHOLDS = np.linspace(0.0, 1.0, 21)
 PRECISION_THRESHOLDS = np.arange(51, dtype=float)
 PRECISION_INDEX = 20  # PRECISION_THRESHOLDS[20] == 20 px
+# normalised precision (LaSOT, TrackingNet): centre error in units of the truth's size; reported at 0.2 as
+# pytracking's extract_results/plot_results do (thresholds 0, 0.01, ..., 0.5)
+NORM_PRECISION_THRESHOLDS = np.arange(51, dtype=float) / 100.0
+NORM_PRECISION_INDEX = 20
+SR50_INDEX, SR75_INDEX = 10, 15  # SUCCESS_THRESHOLDS[10] == 0.5, [15] == 0.75
 _SEPARATORS = re.compile(r"[,\s]+")
 _EPS = np.finfo(float).eps
 
@@ -170,6 +175,13 @@ def centre_errors(boxes, truth):
     return np.sqrt(np.sum((centres(boxes) - centres(truth)) ** 2, axis=1))
 
 
+def normalised_centre_errors(boxes, truth):
+    """pytracking's calc_err_center(normalized=True): both centres divided by the truth's (w, h)."""
+    truth = np.asarray(truth, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.sqrt(np.sum(((centres(boxes) - centres(truth)) / truth[:, 2:]) ** 2, axis=1))
+
+
 def iou_otb(a, b):
     """calcRectInt.m: right = x + w - 1, intersection max(0, min(right) -
     max(left) + 1) per axis, i.e. the overlap of continuous [x, x+w); no
@@ -217,25 +229,36 @@ def valid_truth(truth, convention, origin=0):
 
 
 def frame_scores(result, truth, convention="otb", origin=0):
-    """(overlaps, centre errors) of the frames in the denominator: every frame
-    for otb (invalid truth: -1, -1), the frames with valid truth for got10k.
-    result and truth must have the same length (see align)."""
+    """(overlaps, centre errors) of the frames in the denominator (frame_measures)."""
+    m = frame_measures(result, truth, convention, origin)
+    return m["overlaps"], m["errors"]
+
+
+def frame_measures(result, truth, convention="otb", origin=0):
+    """{overlaps, errors, normalised errors} of the frames in the denominator:
+    every frame for otb (invalid truth: -1, -1, -1, as pytracking scores UAV123)
+    and got10k_otb (invalid truth: NaN, a miss everywhere), the frames with
+    valid truth for got10k. result and truth must have the same length (align)."""
     result, truth = np.asarray(result, dtype=float), np.asarray(truth, dtype=float)
     if result.shape != truth.shape:
         raise ValueError("result %s and truth %s differ in shape" % (result.shape, truth.shape))
+    if convention not in CONVENTIONS:
+        raise ValueError("unknown convention %r (expected one of %s)" % (convention, ", ".join(CONVENTIONS)))
     valid = valid_truth(truth, convention, origin)
     if convention == "otb":
         res = repair_otb(result, truth)
-        errors = centre_errors(res, truth)
         overlaps = -np.ones(len(truth))
         overlaps[valid] = iou_otb(res[valid], truth[valid])
-        errors[~valid] = -1.0
-        return overlaps, errors
+        errors, normalised = centre_errors(res, truth), normalised_centre_errors(res, truth)
+        errors[~valid] = normalised[~valid] = -1.0
+        return {"overlaps": overlaps, "errors": errors, "normalised": normalised}
+    res = result.copy()
+    res[0] = truth[0]
     if convention == "got10k":
-        res = result.copy()
-        res[0] = truth[0]
-        return iou_got10k(res[valid], truth[valid]), centre_errors(res[valid], truth[valid])
-    raise ValueError("unknown convention %r (expected one of %s)" % (convention, ", ".join(CONVENTIONS)))
+        res, truth = res[valid], truth[valid]
+    # got10k_otb: got10k's ExperimentOTB.report: every frame, rect_iou and center_error as they come (NaN: a miss)
+    return {"overlaps": iou_got10k(res, truth), "errors": centre_errors(res, truth),
+            "normalised": normalised_centre_errors(res, truth)}
 
 
 def curves(overlaps, errors):
@@ -264,17 +287,31 @@ def align(result, truth, convention="otb"):
     return result, truth[:m], "result has %d lines, ground truth %d: ground truth cut to %d frames" % (m, n, m)
 
 
-def score(success, precision):
-    """{success_auc, precision_20, success_curve, precision_curve} of two curves."""
-    return {"success_auc": float(np.mean(success)), "precision_20": float(precision[PRECISION_INDEX]),
-            "success_curve": [float(v) for v in success], "precision_curve": [float(v) for v in precision]}
+def score(success, precision, normalised=None, average_overlap=None):
+    """{success_auc, precision_20, sr_50, sr_75, success_curve, precision_curve}
+    of two curves, plus norm_precision_20 and its curve, and ao, when given."""
+    out = {"success_auc": float(np.mean(success)), "precision_20": float(precision[PRECISION_INDEX]),
+           "sr_50": float(success[SR50_INDEX]), "sr_75": float(success[SR75_INDEX]),
+           "success_curve": [float(v) for v in success], "precision_curve": [float(v) for v in precision]}
+    if normalised is not None:
+        out["norm_precision_20"] = float(normalised[NORM_PRECISION_INDEX])
+        out["norm_precision_curve"] = [float(v) for v in normalised]
+    if average_overlap is not None:
+        out["ao"] = float(average_overlap)
+    return out
 
 
 def evaluate_sequence(result, truth, convention="otb", origin=0):
-    """Scores of one sequence: score()'s dict plus "frames" (the denominator)."""
-    overlaps, errors = frame_scores(result, truth, convention, origin)
-    out = score(*curves(overlaps, errors))
-    out["frames"] = int(len(overlaps))
+    """Scores of one sequence: score()'s dict plus "frames" (the denominator).
+    ao: the mean overlap over those frames, a frame without one (NaN, or -1
+    for invalid truth under otb) counting 0."""
+    m = frame_measures(result, truth, convention, origin)
+    success, precision = curves(m["overlaps"], m["errors"])
+    with np.errstate(invalid="ignore"):
+        normalised = np.mean(m["normalised"][:, None] <= NORM_PRECISION_THRESHOLDS[None, :], axis=0)
+    overlaps = np.nan_to_num(np.maximum(m["overlaps"], 0.0), nan=0.0)
+    out = score(success, precision, normalised, float(np.mean(overlaps)))
+    out["frames"] = int(len(m["overlaps"]))
     return out
 
 
@@ -282,12 +319,15 @@ def average(per_sequence, drop_zero_curves=False):
     """score() of the mean of per-sequence curves (equal weight per sequence).
     drop_zero_curves: leave out curves summing to 0, as OTB's plotDrawSave.m does."""
     def mean_of(key, size):
-        rows = np.array([s[key] for s in per_sequence], dtype=float).reshape(-1, size)
+        rows = np.array([s[key] for s in per_sequence if key in s], dtype=float).reshape(-1, size)
         if drop_zero_curves:
             rows = rows[rows.sum(axis=1) > _EPS]
         return rows.mean(axis=0) if len(rows) else np.zeros(size)
+    aos = [s["ao"] for s in per_sequence if "ao" in s]
     out = score(mean_of("success_curve", len(SUCCESS_THRESHOLDS)),
-                mean_of("precision_curve", len(PRECISION_THRESHOLDS)))
+                mean_of("precision_curve", len(PRECISION_THRESHOLDS)),
+                mean_of("norm_precision_curve", len(NORM_PRECISION_THRESHOLDS)),
+                float(np.mean(aos)) if aos else math.nan)
     out["sequences"] = len(per_sequence)
     return out
 
