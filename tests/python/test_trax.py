@@ -379,3 +379,44 @@ def test_docs_recipe_is_a_working_trax_server(tmp_path, fmt):
         assert t.name == "my_tracker" and t.version == 1 and t.image_format == fmt
         assert track(t, scene(n=10)) <= 2.0
     assert_gone(t.pid)
+
+
+# --- trackers that misbehave at the edges: process trees, floods, junk -------------------------
+
+def test_a_grandchild_that_left_with_setsid_is_killed_too():
+    # killpg alone misses it: setsid() gave it a group of its own; the marker in its environment finds it
+    t = bad("--setsid-child", "--hang-after", "1", timeout=0.3)
+    child = int(t.properties["test.child_pid"])
+    assert os.getsid(child) == child
+    t.init(small(), (1, 2, 3, 4))
+    with pytest.raises(TraxError, match="killed it"):
+        t.update(small())
+    assert_gone(t.pid)
+    assert_gone(child, zombie_ok=True)
+
+
+def test_stderr_without_newlines_keeps_the_client_bounded():
+    t = bad("--stderr-bytes", str(48 << 20))  # 48 MiB on stderr, no newline
+    t.init(small(), (1, 2, 3, 4))
+    t.update(small())
+    t.close()
+    tail = t.stderr_tail
+    assert tail and max(len(line) for line in tail) <= (1 << 20) + 64 and "[line cut at 1048576 bytes]" in tail[0]
+
+
+def test_a_tracker_flooding_state_lines_is_killed_with_a_message():
+    t = bad("--flood-after", "1", timeout=5.0)
+    t.init(small(), (1, 2, 3, 4))
+    time.sleep(0.5)  # it floods meanwhile
+    with pytest.raises(TraxError, match="sent more than 64 TraX lines nobody asked for"):
+        t.update(small())
+        t.update(small())
+    assert_gone(t.pid)
+
+
+def test_a_junk_region_names_the_tracker_and_the_line():
+    t = bad("--region", "banana")
+    t.init(small(), (1, 2, 3, 4))
+    with pytest.raises(TraxError) as e:
+        t.update(small())
+    assert "trax_misbehaving.py" in str(e.value) and "@@TRAX:state \"banana\"" in str(e.value)

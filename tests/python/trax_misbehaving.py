@@ -13,6 +13,10 @@ answered ones, where it does what the option says:
     --quit-after N      sends @@TRAX:quit with trax.reason=out of memory
     --exit-after N      exits with code 0 without a word
 
+--flood-after N     answers with an endless stream of state lines
+--stderr-bytes B    writes B bytes to stderr without a newline before its hello
+--setsid-child      like --spawn-child, but the grandchild leaves the group with setsid()
+
 --chatter prints lines that are not TraX messages on stdout and stderr
 before every answer; --spawn-child starts a grandchild that sleeps (its pid
 is in the hello as test.child_pid). Standard library only: starts fast.
@@ -38,6 +42,9 @@ def main():
     p.add_argument("--region", default="10,20,30,40", help="the region answered to frames")
     p.add_argument("--chatter", action="store_true")
     p.add_argument("--spawn-child", action="store_true")
+    p.add_argument("--setsid-child", action="store_true")
+    p.add_argument("--flood-after", type=int, default=None)
+    p.add_argument("--stderr-bytes", type=int, default=0)
     a = p.parse_args()
     out = sys.stdout
 
@@ -51,9 +58,12 @@ def main():
     if a.hang_after == -1:
         time.sleep(3600)
     child = ""
-    if a.spawn_child:
+    if a.spawn_child or a.setsid_child:
         child = ' "test.child_pid=%d"' % subprocess.Popen(
-            [sys.executable, "-c", "import time; time.sleep(300)"]).pid
+            [sys.executable, "-c", "import time; time.sleep(300)"], start_new_session=a.setsid_child).pid
+    chunk = b"x" * (1 << 20)
+    for _ in range(a.stderr_bytes >> 20):
+        os.write(2, chunk)
     say('@@TRAX:hello "trax.version=%s" "trax.name=misbehaving" "trax.region=%s" "trax.image=%s" '
         '"trax.channels=%s"%s' % (a.version, a.region_formats, a.image_formats, a.channels, child))
     answered = 0
@@ -77,6 +87,9 @@ def main():
             os.kill(os.getpid(), signal.SIGSEGV)
         if a.exit_after == answered:
             os._exit(0)
+        if a.flood_after == answered:
+            while True:
+                say('@@TRAX:state "1,2,3,4"')
         if a.garbage_after == answered:
             say('@@TRAX:state "12,34')
         elif a.error_after == answered:

@@ -32,10 +32,13 @@ from typing import Dict, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from .errors import Sim4cvError
+from . import proctree
 from . import trax_protocol as tp
 
 SPEC_PREFIX = "trax:"
 _TAIL_LINES = 20
+_MAX_LINE_BYTES = 1 << 20    # a longer line (stdout or stderr) keeps its first MiB: the client's memory stays bounded
+_MAX_PENDING_LINES = 64      # unread protocol lines beyond this: the tracker floods, it is killed
 
 
 class TraxError(Sim4cvError):
@@ -144,6 +147,9 @@ class TraxTracker:
 
         full_env = dict(os.environ)
         full_env.update({str(k): str(v) for k, v in (env or {}).items()})
+        self._token = proctree.new_token()   # marks its descendants, even those that leave with setsid()
+        full_env.update(proctree.marker(self._token))
+        self._flooded = False
         if transport == "socket":
             self._listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
             self._listener.bind(("127.0.0.1", 0))
@@ -285,7 +291,7 @@ class TraxTracker:
         try:
             region = tp.parse_region(msg.arguments[0])
         except ValueError as e:
-            self._fail("answered %s with a bad region: %s" % (after, e))
+            self._fail("answered %s with a bad region: %s (line %r)" % (after, e, self._last_line[:200]))
         if region.kind not in ("rectangle", "polygon", "special"):
             self._fail("answered %s with a %s region; sim4cv reads rectangle, polygon or special regions: %r"
                        % (after, region.kind, self._last_line[:200]))
@@ -295,6 +301,9 @@ class TraxTracker:
 
     def _receive(self, deadline: float, what: str) -> tp.Message:
         remaining = deadline - time.monotonic()
+        if self._flooded:
+            self._fail("sent more than %d TraX lines nobody asked for (waiting for %s); killed it"
+                       % (_MAX_PENDING_LINES, what))
         try:
             line = self._lines.get(timeout=max(remaining, 0.0)) if remaining > 0 else self._lines.get_nowait()
         except queue.Empty:
@@ -354,6 +363,7 @@ class TraxTracker:
 
         def run():
             buf, scanned = bytearray(), 0        # lines end at \n only: a \r is part of the line
+            skipping = False                     # inside an over-long line, after its kept start
             try:
                 while True:
                     chunk = read(1 << 16)
@@ -362,15 +372,26 @@ class TraxTracker:
                     buf += chunk
                     while True:
                         eol = buf.find(b"\n", scanned)
+                        if eol < 0 and len(buf) > _MAX_LINE_BYTES:
+                            # no newline in sight: keep the line's start, drop the rest up to its end
+                            on_line(buf[:_MAX_LINE_BYTES].decode("utf-8", "replace") + " [line cut at %d bytes]"
+                                    % _MAX_LINE_BYTES)
+                            buf, scanned, skipping = bytearray(), 0, True
+                            break
                         if eol < 0:
                             scanned = len(buf)
                             break
+                        if skipping:
+                            skipping = False
+                            del buf[:eol + 1]
+                            scanned = 0
+                            continue
                         on_line(buf[:eol].decode("utf-8", "replace"))
                         del buf[:eol + 1]
                         scanned = 0
             except (OSError, ValueError):
                 pass
-            if buf:                              # a last line without its newline still counts
+            if buf and not skipping:             # a last line without its newline still counts
                 on_line(buf.decode("utf-8", "replace"))
             if end:
                 self._lines.put(None)
@@ -380,7 +401,7 @@ class TraxTracker:
 
     def _on_stdout_line(self, line: str):
         if self.transport == "stdio" and tp.is_message_line(line):
-            self._lines.put(line)
+            self._queue_line(line)
         else:                                # the tracker's own output: the protocol ignores it
             self._output_tail.append(line)
             if self.echo:
@@ -391,9 +412,16 @@ class TraxTracker:
         if self.echo:
             print("[trax %s] %s" % (self.args[0], line), file=sys.stderr)
 
+    def _queue_line(self, line: str):
+        # a tracker answers one request at a time: lines beyond a few unread ones are a flood, not answers
+        if self._lines.qsize() >= _MAX_PENDING_LINES:
+            self._flooded = True
+        else:
+            self._lines.put(line)
+
     def _on_socket_line(self, line: str):
         if tp.is_message_line(line):
-            self._lines.put(line)
+            self._queue_line(line)
         else:
             self._on_stdout_line(line)
 
@@ -466,10 +494,7 @@ class TraxTracker:
     def _kill_and_reap(self):
         if self._reaped:                          # once only: after the wait the pid may be someone else's
             return
-        try:
-            os.killpg(self.pid, signal.SIGKILL)   # the leader is not reaped yet: the group id is still ours
-        except (ProcessLookupError, PermissionError):
-            pass
+        proctree.kill_tree(self.pid, self._token)  # the leader is not reaped yet: the group id is still ours
         self.proc.wait()
         self._reaped = True
         self._close_input()
