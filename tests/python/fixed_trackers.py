@@ -34,3 +34,63 @@ def corner():
 
 def broken():
     return Broken()
+
+
+class Hanging:
+    """Hangs in its third update(), as a tracker stuck in a loop or a lock does."""
+
+    def __init__(self):
+        self.frames = 0
+
+    def init(self, image, box):
+        pass
+
+    def update(self, image):
+        import time
+        self.frames += 1
+        if self.frames == 3:
+            time.sleep(3600)
+        return None
+
+
+class Banana:
+    def init(self, image, box):
+        pass
+
+    def update(self, image):
+        return "banana"
+
+
+class Unstartable:
+    def __init__(self):
+        raise RuntimeError("no GPU here")
+
+
+class Refused:
+    """Answers boxes the daemon refuses: far outside the image, then infinite."""
+
+    def __init__(self):
+        self.frames = 0
+
+    def init(self, image, box):
+        pass
+
+    def update(self, image):
+        self.frames += 1
+        return (1e6, 1e6, 10.0, 10.0) if self.frames % 2 else (float("inf"), 0.0, 10.0, 10.0)
+
+
+def hanging():
+    return Hanging()
+
+
+def banana():
+    return Banana()
+
+
+def unstartable():
+    return Unstartable()
+
+
+def refused():
+    return Refused()

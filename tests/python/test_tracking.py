@@ -5,6 +5,8 @@ import csv
 import json
 import os
 
+import pytest
+
 from conftest import REPO_ROOT
 from sim4cv.tracking import Session, run_session
 
@@ -67,3 +69,32 @@ def test_a_walking_pedestrian_can_be_the_target(tmp_path):
     (gt,) = run(tmp_path, map="tracking/easy_urban", speed=2, target="pedestrian", trackers=["gt"], seconds=6)
     assert gt["error"] == "" and not gt["lost"] and gt["completion"] == 1.0
     assert 8 < gt["covered_m"] < 14  # 2 m/s for about 6 s
+
+
+def test_sessions_survive_misbehaving_trackers(tmp_path):
+    # five UAVs in one world: gt, and four trackers that each used to end or hang the session
+    trackers = ["gt", "python:fixed_trackers:unstartable", "python:fixed_trackers:hanging",
+                "python:fixed_trackers:banana", "python:fixed_trackers:refused"]
+    gt, unstartable, hanging, banana, refused = run(tmp_path, map="tracking/easy_urban", speed=4, trackers=trackers,
+                                                    seconds=3, tracker_timeout_s=2.0)
+    # a tracker that fails to start is reported; the others fly on (no broken barrier)
+    assert "no GPU here" in unstartable["error"] and unstartable["frames_processed"] == 0
+    assert gt["error"] == "" and not gt["lost"] and gt["completion"] == 1.0 and gt["frames_processed"] > 80
+    # a python: tracker whose update() hangs is killed after its timeout, and keeps what it flew
+    assert "python:fixed_trackers:hanging: update() did not answer within 2 s; killed it" in hanging["error"]
+    assert hanging["frames_processed"] == 2 and hanging["seconds"] > 0
+    # junk answers: an error naming the tracker and what it answered
+    assert "python:fixed_trackers:banana: update() answered 'banana'; expected (x, y, w, h) or None" \
+        in banana["error"]
+    # boxes the daemon refuses (far outside the image, inf) are counted and the run goes on
+    assert refused["error"] == "" and refused["boxes_refused"] >= 10 and refused["frames_processed"] > 10
+    # strict JSON: no NaN or Infinity in session.json (null instead)
+    text = (tmp_path / "session.json").read_text()
+    session = json.loads(text, parse_constant=lambda name: pytest.fail("session.json holds %s" % name))
+    assert session["results"][3]["mean_center_error_px"] is None
+
+
+def test_a_delay_in_lockstep_is_refused_with_a_message(tmp_path):
+    with pytest.raises(ValueError, match="delay_ms 200 with mode lockstep: the simulation waits for every answer"):
+        run(tmp_path, trackers=["gt"], mode="lockstep", delay_ms=200, seconds=1)
+    assert not os.path.exists(tmp_path / "session.json")

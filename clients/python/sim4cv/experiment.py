@@ -231,7 +231,8 @@ def _run_online(run, out_dir, address):
                      "wall_s": time.monotonic() - t0}, False
     summary["wall_s"] = time.monotonic() - t0
     with open(os.path.join(run_dir, "session.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+        from .strict_json import dump
+        dump(summary, f, indent=1)
     return run, summary, False
 
 

@@ -3,13 +3,13 @@
 build/tools/sim4cv_logdraw (every UAV of every run log, one colour per log)."""
 
 import csv
-import json
 import math
 import os
 import platform
 import statistics
 import subprocess
 
+from . import strict_json
 from .daemon import REPO_ROOT
 
 LOGDRAW = os.environ.get("SIM4CV_LOGDRAW", os.path.join(REPO_ROOT, "build", "tools", "sim4cv_logdraw"))
@@ -29,6 +29,8 @@ def machine():
 
 
 def _f(v, fmt="%.3f"):
+    if v is None:  # a missing number read back from strict JSON
+        return "-"
     if isinstance(v, bool):
         return "yes" if v else "no"
     if isinstance(v, float):
@@ -46,7 +48,7 @@ def write_tables(records, out_dir):
     for r in records:
         keys += [k for k in r if k not in keys]
     with open(os.path.join(out_dir, "results.json"), "w") as f:
-        json.dump(records, f, indent=1)
+        strict_json.dump(records, f, indent=1)  # null, not NaN: every JSON parser reads it
     with open(os.path.join(out_dir, "results.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys)
         w.writeheader()
@@ -85,7 +87,8 @@ def completion_plots(records, trackers, plots_dir):
             means, lo, hi = [], [], []
             for g in groups:
                 vals = [r["completion"] for r in recs if (r["map"], r["speed"], r["delay_ms"]) == g
-                        and r["tracker"] == t and not math.isnan(r["completion"])]
+                        and r["tracker"] == t and isinstance(r["completion"], (int, float))
+                        and not math.isnan(r["completion"])]
                 m = statistics.fmean(vals) if vals else 0.0
                 means.append(m)
                 lo.append(m - min(vals) if vals else 0.0)

@@ -73,14 +73,14 @@ def descendants(root, token=None):
 
 
 def kill_tree(pid, token=None):
-    """SIGKILL to `pid`'s process group (it was started with start_new_session),
-    to its descendants and to every process carrying `token`; the caller reaps `pid`."""
+    """SIGKILL to `pid`, its process group (if it leads one: start_new_session),
+    its descendants and every process carrying `token`; the caller reaps `pid`."""
     others = descendants(pid, token)
     try:
         os.killpg(pid, signal.SIGKILL)
     except (ProcessLookupError, PermissionError):
-        pass
-    for other in others:
+        pass  # not a group leader (a multiprocessing child): killed with the others below
+    for other in sorted(others) + [pid]:
         try:
             os.kill(other, signal.SIGKILL)
         except (ProcessLookupError, PermissionError):

@@ -15,7 +15,6 @@ the top-left pixel at (0, 0). The ground-truth tracker needs the frame:
 `update(image, frame=...)` on every tracker takes it and only `gt` reads it.
 """
 
-import importlib
 from typing import Optional, Sequence, Tuple
 
 import numpy as np
@@ -150,34 +149,24 @@ class OpenCvTracker(Tracker):
 
 
 class PythonTracker(Tracker):
-    """FACTORY() from MODULE: any object with init(image, box) and
-    update(image) -> (x, y, w, h) or None."""
+    """FACTORY() from MODULE, in a process of its own (sim4cv.python_tracker):
+    each call may take `timeout` seconds, as a TraX tracker's, after which
+    its process tree is killed; junk answers are errors naming the tracker."""
 
-    def __init__(self, module: str, factory: str):
-        try:
-            made = getattr(importlib.import_module(module), factory)()
-        except (ImportError, AttributeError) as e:
-            raise ValueError("python:%s:%s: %s" % (module, factory, e)) from e
-        for method in ("init", "update"):
-            if not callable(getattr(made, method, None)):
-                raise ValueError("python:%s:%s made %r, which has no %s(...) method" % (module, factory, made, method))
-        self._tracker = made
-        self.name = "python:%s:%s" % (module, factory)
+    def __init__(self, module: str, factory: str, timeout: float = 30.0):
+        from .python_tracker import TrackerProcess
+        self._tracker = TrackerProcess(module, factory, timeout)
+        self.name = self._tracker.name
 
     def _init(self, image, box, frame):
-        self._tracker.init(image, box)
+        self._tracker.call("init", image, box)
 
     def _update(self, image, frame):
-        box = self._tracker.update(image)
-        if box is None:
-            return None
-        x, y, w, h = (float(v) for v in box)
-        return (x, y, w, h)
+        from .python_tracker import check_box
+        return check_box(self.name, self._tracker.call("update", image))
 
     def close(self):
-        close = getattr(self._tracker, "close", None)
-        if callable(close):
-            close()
+        self._tracker.close()
 
 
 class TraxTrackerAdapter(Tracker):
@@ -212,7 +201,7 @@ def make_tracker(spec: str, target_id: int = 0, timeout: float = 30.0) -> Tracke
         return OpenCvTracker(rest)
     if kind == "python" and rest.count(":") == 1 and all(rest.split(":")):
         module, factory = rest.split(":")
-        return PythonTracker(module, factory)
+        return PythonTracker(module, factory, timeout)
     if kind in ("trax", "octave") and rest.strip():
         return TraxTrackerAdapter(spec, timeout)
     raise ValueError("tracker specification %r is none of: gt, baseline:static, baseline:centre, opencv:NAME, trax:COMMAND LINE, "

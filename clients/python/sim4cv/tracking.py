@@ -25,7 +25,6 @@ of sim time; that UAV's run then ends with the distance covered.
 """
 
 import csv
-import json
 import math
 import multiprocessing
 import os
@@ -34,6 +33,7 @@ import time
 from dataclasses import asdict, dataclass, field
 from typing import Dict, List, Optional
 
+from . import strict_json
 from .daemon import REPO_ROOT, OwnDaemon
 
 EXTRA_UAV_CLIMB_M = 1.5
@@ -59,6 +59,7 @@ class Session:
     min_visibility: float = 0.1         # a box with less visibility counts as unseen
     conditions: str = ""                # a weather/time-of-day preset (docs/protocol.md); "": the daemon's
     log: bool = True                    # write the daemon's run log (trajectories)
+    tracker_timeout_s: float = 30.0     # each tracker call (python:, trax:, octave:) may take this long; then killed
 
     def daemon_args(self, log_path: Optional[str]) -> List[str]:
         args = ["--frame-hz", "%g" % self.fps, "--car-speed", "%g" % self.speed, "--log-level", "warning"]
@@ -142,13 +143,29 @@ def _worker(address, camera, uav_id, target_id, spec, session_dict, barrier, out
     session = Session(**session_dict)
     result = {"tracker": spec, "uav": uav_id, "camera": camera, "lost": False, "error": ""}
     rows = []
+    flown = {"frames_processed": 0, "frames_skipped": 0, "boxes_refused": 0, "seconds": 0.0, "covered_m": 0.0}
+    update_s, waited = [], [False]
+    tracker = None
     try:
-        tracker = make_tracker(spec, target_id)
+        tracker = make_tracker(spec, target_id, timeout=session.tracker_timeout_s)
         with connect(address, name="tracker-%d" % uav_id) as client:
             delivery = "lockstep" if session.mode == "lockstep" else "on_request"
             client.subscribe(camera, ["rgb", "boxes"], delivery, with_state=True)
+            waited[0] = True
             barrier.wait(120)  # every tracker subscribed: nobody steps alone
-            get = client.step_and_receive if session.mode == "lockstep" else client.request_frame
+            fetch = client.step_and_receive if session.mode == "lockstep" else client.request_frame
+
+            def get(timeout):
+                """The next frame; an Error refusing one of our boxes (far outside the image, inf) is counted."""
+                call = fetch
+                while True:
+                    try:
+                        return call(timeout)
+                    except ServerError as e:
+                        if e.fatal or "TrackerOutput" not in e.message:
+                            raise
+                        flown["boxes_refused"] += 1
+                        call = client.receive_frame  # the frame asked for is still coming
             frame = get(30.0)
             start, steady, last = frame.sim_time, 0.0, None
             while steady < STEADY_S:  # the UAV is at its station, the target still in the image
@@ -165,28 +182,28 @@ def _worker(address, camera, uav_id, target_id, spec, session_dict, barrier, out
             tracker.init(frame.image("rgb"), gt, frame=frame)
             client.send_tracker_output(frame.frame_id, *map(float, gt), 1.0)
             client.uav_track(uav_id, camera)  # from here on the tracker's boxes steer the UAV
-            last_id, unseen_since, covered, last_target = frame.frame_id, None, 0.0, None
-            processed, skipped, refused, update_s = 0, 0, 0, []
+            last_id, unseen_since, last_target = frame.frame_id, None, None
             while frame.sim_time - start < session.seconds:
                 frame = get(30.0)
-                skipped += max(0, frame.frame_id - last_id - 1)
+                flown["frames_skipped"] += max(0, frame.frame_id - last_id - 1)
                 last_id = frame.frame_id
+                flown["seconds"] = frame.sim_time - start
                 t0 = time.perf_counter()
                 box = tracker.update(frame.image("rgb"), frame=frame)
                 update_s.append(time.perf_counter() - t0)
                 if session.delay_ms > 0:
                     time.sleep(session.delay_ms / 1000.0)
-                processed += 1
+                flown["frames_processed"] += 1
                 if box is not None and box[2] > 0 and box[3] > 0:
                     try:
                         client.send_tracker_output(frame.frame_id, *box, 1.0)
-                    except ServerError:
-                        refused += 1  # e.g. a box far outside the image: the servo keeps the last one
+                    except (ServerError, ValueError):
+                        flown["boxes_refused"] += 1  # refused before it left: the servo keeps the last box
                 truth = frame.box(target_id)
                 poses = {e.id: e.position for e in frame.entities}
                 target = poses.get(target_id, (math.nan,) * 3)
                 if last_target is not None:
-                    covered += math.dist(target[:2], last_target[:2])
+                    flown["covered_m"] += math.dist(target[:2], last_target[:2])
                 last_target = target
                 rows.append([frame.frame_id, frame.sim_time] + _box_or_nan(box) +
                             _box_or_nan(None if truth is None else (truth.x, truth.y, truth.width, truth.height)) +
@@ -199,19 +216,23 @@ def _worker(address, camera, uav_id, target_id, spec, session_dict, barrier, out
                         break
                 else:
                     unseen_since = None
-            ended = frame.sim_time - start
-            result.update(frames_processed=processed, frames_skipped=skipped, boxes_refused=refused,
-                          tracker_fps=len(update_s) / max(sum(update_s), 1e-9), seconds=ended, covered_m=covered,
-                          completion=1.0 if not result["lost"] else
-                          covered / max(covered + session.speed * (session.seconds - ended), 1e-9))
-        tracker.close()
+            flown["seconds"] = frame.sim_time - start
     except Exception as e:  # reported in the results: one tracker's failure ends only its run
         result["error"] = "%s: %s" % (type(e).__name__, e)
         result["lost"] = True
-        try:
-            barrier.abort()
-        except Exception:
-            pass
+        if not waited[0]:  # failed before the barrier: still pass it, so the other UAVs start and fly on
+            try:
+                barrier.wait(120)
+            except Exception:
+                pass
+    finally:
+        if tracker is not None:
+            tracker.close()
+    # what it flew counts, whether its run ended by the clock, a loss or an error
+    ended = flown["seconds"]
+    result.update(flown, tracker_fps=len(update_s) / sum(update_s) if update_s and sum(update_s) > 0 else math.nan,
+                  completion=1.0 if not result["lost"] else
+                  flown["covered_m"] / max(flown["covered_m"] + session.speed * (session.seconds - ended), 1e-9))
     with open(out_csv, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(FRAME_HEADER)
@@ -250,6 +271,9 @@ def run_session(session: Session, out_dir: str, address: Optional[str] = None) -
     row per processed frame), run.s4log (the daemon's run log, if its own),
     session.json (the session and a result per UAV). Returns what
     session.json holds."""
+    if session.mode == "lockstep" and session.delay_ms > 0:
+        raise ValueError("delay_ms %g with mode lockstep: the simulation waits for every answer, so a delay "
+                         "changes nothing it measures; use mode realtime for a latency sweep" % session.delay_ms)
     os.makedirs(out_dir, exist_ok=True)
     log_path = os.path.join(out_dir, "run.s4log") if session.log and address is None else None
     daemon = None
@@ -288,5 +312,5 @@ def run_session(session: Session, out_dir: str, address: Optional[str] = None) -
     collected.sort(key=lambda r: order[r["uav"]])
     summary = {"session": asdict(session), "results": collected, "log": log_path}
     with open(os.path.join(out_dir, "session.json"), "w") as f:
-        json.dump(summary, f, indent=1, allow_nan=True)
+        strict_json.dump(summary, f, indent=1)  # null, not NaN
     return summary
