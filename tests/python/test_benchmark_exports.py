@@ -157,3 +157,24 @@ def test_baselines_answer_the_first_box_and_the_centred_first_size():
         tracker.init(image, (10, 20, 30, 40))
     assert static.update(image) == (10.0, 20.0, 30.0, 40.0) == static.update(image)
     assert centre.update(image) == (145.0, 70.0, 30.0, 40.0)  # (320 - 30) / 2, (180 - 40) / 2
+
+
+def test_a_tracker_missing_sequences_is_marked_and_not_ranked_with_the_complete_ones(sequences, tmp_path):
+    from sim4cv import experiment_report, ope
+    # 'crashy' crashed on beta_s4 (no result) but is perfect on alpha_s8; 'steady' is mediocre on both
+    results = tmp_path / "results"
+    for tracker, seqs, lines in (("crashy", ["alpha_s8"], TRUTH), ("steady", ["alpha_s8", "beta_s4"],
+                                                                   ["4,5,10,6"] * 4)):
+        (results / tracker).mkdir(parents=True)
+        for seq in seqs:
+            (results / tracker / (seq + ".txt")).write_text("\n".join(lines) + "\n")
+    report = ope.evaluate(sequences, str(results), "otb")
+    assert report["trackers"]["crashy"]["success_auc"] > report["trackers"]["steady"]["success_auc"]
+    records = [{"kind": "offline", "tracker": t, "tracker_dir": t, "sequence": s, "frames": 4, "tracker_fps": 100.0,
+                "fps_per_frame": 100.0, "error": "" if (t, s) != ("crashy", "beta_s4") else "RuntimeError: boom"}
+               for t in ("crashy", "steady") for s in ("alpha_s8", "beta_s4")]
+    exp = {"name": "t", "kind": "offline", "convention": "otb", "trackers": ["crashy", "steady"]}
+    experiment_report.write_all(exp, records, str(tmp_path), "test", 1.0, report)
+    table = [line for line in (tmp_path / "report.md").read_text().splitlines() if line.startswith("| ")]
+    order = [line.split(" | ")[0][2:] for line in table[1:] if not line.startswith("| tracker |")]
+    assert order.index("steady") < order.index("crashy (1 of 2 sequences: not ranked)")

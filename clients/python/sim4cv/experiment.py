@@ -131,6 +131,9 @@ def load(path):
     if any(f not in FPS for f in exp["fps"]):
         raise ExperimentError("fps: each must be one of 15, 30, 60, got %s" % exp["fps"])
     exp["delays_ms"] = _numbers("delays_ms", exp["delays_ms"], 0, 60000)
+    if any(d > 0 for d in exp["delays_ms"]) and "realtime" not in exp["modes"]:
+        raise ExperimentError("delays_ms: %s needs modes: [realtime]; in lockstep the simulation waits for every "
+                              "answer, so a delay changes nothing it measures" % exp["delays_ms"])
     bad = [m for m in exp["modes"] if m not in MODES]
     if bad:
         raise ExperimentError("modes: unknown %s (choose from lockstep, realtime)" % bad)
@@ -193,6 +196,8 @@ def online_runs(exp):
             for mode in exp["modes"]:
                 for fps in exp["fps"]:
                     for delay in exp["delays_ms"]:
+                        if mode == "lockstep" and delay > 0:
+                            continue  # run_session refuses it: the lockstep control runs at delay 0
                         for cond in exp["conditions"]:
                             for rep in range(1, exp["repetitions"] + 1):
                                 for group in groups:

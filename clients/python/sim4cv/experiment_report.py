@@ -113,6 +113,7 @@ def completion_plots(records, trackers, plots_dir):
 
 def latency_plot(records, trackers, plots_dir):
     """Completion and mean centre error vs delay_ms, a line per tracker (and map/speed/mode)."""
+    records = [r for r in records if r["mode"] == "realtime"]  # a delay means nothing in lockstep
     if len({r["delay_ms"] for r in records}) < 2:
         return []
     plt = _plt()
@@ -175,7 +176,8 @@ def trajectory_maps(records, out_dir, plots_dir):
     return written, notes
 
 
-ONLINE_COLUMNS = ["map", "speed", "tracker", "mode", "fps", "delay_ms", "runs", "completion", "lost",
+ONLINE_COLUMNS = ["map", "speed", "tracker", "mode", "fps", "delay_ms", "runs", "completion", "completion_sd",
+                  "completion_range", "lost",
                   "frames_processed", "frames_skipped", "tracker_fps", "mean_center_error_px", "deviation_from_gt_m"]
 
 
@@ -196,6 +198,11 @@ def summary_rows(records):
         for key in ("completion", "frames_processed", "frames_skipped", "tracker_fps", "mean_center_error_px",
                     "deviation_from_gt_m"):
             row[key] = _mean([r.get(key, math.nan) for r in recs])
+        # the spread over repetitions: real time is not deterministic, one run is one sample
+        done = [r["completion"] for r in recs if isinstance(r.get("completion"), (int, float))
+                and not math.isnan(r["completion"])]
+        row["completion_sd"] = statistics.stdev(done) if len(done) > 1 else math.nan
+        row["completion_range"] = "%.3f-%.3f" % (min(done), max(done)) if done else "-"
         row["errors"] = "; ".join(sorted({r["error"] for r in recs if r["error"]}))
         rows.append(row)
     return rows
