@@ -36,21 +36,14 @@ def broken():
     return Broken()
 
 
-class Hanging:
+class Hanging(Broken):
     """Hangs in its third update(), as a tracker stuck in a loop or a lock does."""
-
-    def __init__(self):
-        self.frames = 0
-
-    def init(self, image, box):
-        pass
 
     def update(self, image):
         import time
-        self.frames += 1
-        if self.frames == 3:
+        if self.frames == 2:
             time.sleep(3600)
-        return None
+        return super().update(image)
 
 
 class Banana:
@@ -66,14 +59,8 @@ class Unstartable:
         raise RuntimeError("no GPU here")
 
 
-class Refused:
+class Refused(Broken):
     """Answers boxes the daemon refuses: far outside the image, then infinite."""
-
-    def __init__(self):
-        self.frames = 0
-
-    def init(self, image, box):
-        pass
 
     def update(self, image):
         self.frames += 1

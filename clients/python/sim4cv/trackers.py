@@ -140,9 +140,9 @@ class OpenCvTracker(Tracker):
         self._tracker.init(bgr, (int(round(x)), int(round(y)), max(1, int(round(w))), max(1, int(round(h)))))
 
     def _update(self, image, frame):
-        # A tracker that doubts itself (MOSSE's peak-to-sidelobe test, KCF's
-        # peak) still says where it looks; that box is its answer, as in
-        # the trackers' own benchmarks. Only no box at all is no answer.
+        # OpenCV 4.6's MOSSE and KCF answer (False, (0, 0, 0, 0)) when their
+        # own test fails (MOSSE's peak-to-sidelobe ratio, KCF's peak): there
+        # is no box to use, so that is no answer (None), as a zero-size box is.
         _, box = self._tracker.update(self._cv2.cvtColor(image, self._cv2.COLOR_RGB2BGR))
         x, y, w, h = (float(v) for v in box)
         return (x, y, w, h) if w > 0 and h > 0 else None
