@@ -45,6 +45,11 @@ def test_run_names_and_grouping(tmp_path):
     assert len(runs) == 2 * 2 * 2  # speeds x repetitions x tracker groups (2 + 1)
     assert [r["session"]["trackers"] for r in runs[:2]] == [["gt", "opencv:kcf"], ["opencv:mosse"]]
     assert len({r["name"] for r in runs}) == len(runs)
+    # a delay means nothing in lockstep: its runs are made at delay 0 only, the control of the realtime ones
+    path.write_text("kind: online\nmodes: [realtime, lockstep]\ndelays_ms: [0, 100]\n")
+    runs = experiment.online_runs(experiment.load(str(path)))
+    assert sorted((r["session"]["mode"], r["session"]["delay_ms"]) for r in runs) == [
+        ("lockstep", 0.0), ("realtime", 0.0), ("realtime", 100.0)]
 
 
 @pytest.mark.parametrize("text, named", [
@@ -53,6 +58,7 @@ def test_run_names_and_grouping(tmp_path):
     ("kind: online\ntrackers: [gt, 'fancy:tracker']\n", "fancy:tracker"),
     ("kind: online\nmaps: [tracking/nowhere]\n", "tracking/nowhere"),
     ("kind: online\nmodes: [fast]\n", "modes"),
+    ("kind: online\nmodes: [lockstep]\ndelays_ms: [0, 200]\n", "delays_ms: [0.0, 200.0] needs modes: [realtime]"),
     ("kind: offline\nsequences: {maps: [tracking/easy_urban], frame: 10}\ntrackers: [gt]\n", "frame"),
 ])
 def test_bad_file_fails_before_any_run(tmp_path, text, named):
