@@ -13,15 +13,19 @@ exact ground truth and automatic attributes (sim4cv.attributes).
 For each (map, speed) the tool starts its own sim4cvd (`--map
 scenes/tracking/<name>.map --car-speed S --mode lockstep`; $SIM4CVD or
 build/server/daemon/sim4cvd), or with --daemon loads the map into that daemon,
-and films the map's car (the target) with the map's UAV, which follows it by
-default, through the camera "uav", lockstep, rgb + boxes (+ channels) with
-state. Per sequence DIR/<map>_s<speed>[_<conditions>]/:
+and films the map's car (the target), lockstep, rgb + boxes (+ channels)
+with state: by default through a world-fixed camera like the UAV's camera
+"uav", flown by sim4cv.pilot (a pilot model: lag, limited rates, wind,
+manoeuvres; the UAV is removed), or with camera_motion "servo" through the
+camera "uav" of the map's UAV following the car. Per sequence
+DIR/<map>_s<speed>[_<conditions>]/:
 
     img/000001.jpg ...          RGB, JPEG quality 95
     groundtruth_rect.txt        x,y,w,h per frame, 0-based pixels, box = [x, x+w) x [y, y+h);
                                 NaN,NaN,NaN,NaN where the target has no visible pixel
     poses.csv                   frame, frame_id, sim_time, uav pose, target pose (yaw in degrees),
                                 visibility, visible pixels, camera pose
+    pilot.csv                   (pilot) per frame: manoeuvre, framing offsets, wind
     measures.csv                frame, in_view, the target's projected box, box luma, BC similarity,
                                 similar-object distance (the attributes' image inputs)
     depth/000001.npy, mask/000001.png, ...   with --channels
