@@ -138,20 +138,28 @@ class Controller:
         return {"steer_waypoint": self.steer_waypoint, "steer_gain": self.gain, "slowdown": self.slowdown}
 
 
-def add_arguments(parser, steer_waypoint: int = 1) -> None:
-    """The Controller's command-line options (read back by from_arguments)."""
+def add_arguments(parser, steer_waypoint: Optional[int] = None) -> None:
+    """The Controller's command-line options (read back by from_arguments).
+    Unset ones stay None, so a model card (sim4cv.driving_card.apply) can
+    fill them; from_arguments fills what is still unset with the defaults."""
     parser.add_argument("--steer-waypoint", type=int, default=steer_waypoint, choices=(1, 2, 3, 4),
-                        help="the waypoint the steering aims at (1: the paper's rule; default %(default)s)")
-    parser.add_argument("--steer-gain", type=float, default=1.0,
-                        help="multiplies the steering angle (1: the paper's rule)")
-    parser.add_argument("--turn-slowdown", type=float, default=0.0,
-                        help="m/s of speed cap lost per metre of |h4|, braking down to it (0: the paper's throttle)")
+                        help="the waypoint the steering aims at (1: the paper's rule; default: the model card's, "
+                             "else %s)" % (steer_waypoint or 1))
+    parser.add_argument("--steer-gain", type=float, default=None,
+                        help="multiplies the steering angle (default: the model card's, else 1, the paper's rule)")
+    parser.add_argument("--turn-slowdown", type=float, default=None,
+                        help="m/s of speed cap lost per metre of |h4|, braking down to it (default: the model "
+                             "card's, else 0: the paper's throttle)")
 
 
 def from_arguments(parser, args) -> Controller:
-    """The Controller of add_arguments' options; a bad one ends the command
-    through parser.error (exit status 2) with Controller's message."""
+    """The Controller of add_arguments' options (unset ones: Controller's
+    defaults); a bad one ends the command through parser.error (exit
+    status 2) with Controller's message."""
+    default = Controller()
     try:
-        return Controller(args.steer_waypoint, args.steer_gain, args.turn_slowdown)
+        return Controller(default.steer_waypoint if args.steer_waypoint is None else args.steer_waypoint,
+                          default.gain if args.steer_gain is None else args.steer_gain,
+                          default.slowdown if args.turn_slowdown is None else args.turn_slowdown)
     except ValueError as e:
         parser.error(str(e))

@@ -21,7 +21,7 @@ import json
 import math
 import os
 import time
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -245,9 +245,12 @@ ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering"
 
 def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, speed: float = DEFAULT_SPEED,
              conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "", obstacles: int = 0,
-             seed: int = 0, controller: dc.Controller = dc.Controller(), takeover_m: float = 0.0) -> dict:
+             seed: int = 0, controller: dc.Controller = dc.Controller(), takeover_m: float = 0.0,
+             settings_from: Optional[Dict[str, str]] = None) -> dict:
     """Drives every route of every map; writes out/driving.json, out/runs/*.csv
-    and the plots; returns driving.json's content. takeover_m: drive_route's."""
+    and the plots; returns driving.json's content. takeover_m: drive_route's.
+    settings_from: where each controller setting came from (flag, model card
+    or default: sim4cv.driving_card.apply), recorded in the report."""
     import sim4cv
     from .daemon import OwnDaemon
     from . import driving_plots
@@ -258,7 +261,8 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
                            "maps": [p for p, _ in resolved], "speed_m_s": speed, "conditions": conditions or "clear_noon",
                            "frame_hz": frame_hz, "off_road_m": OFF_ROAD_M,
                            "lane_departure_m": dm.LANE_DEPARTURE_M, "obstacles": obstacles, "seed": seed,
-                           "takeover_m": takeover_m, **controller.settings()},
+                           "takeover_m": takeover_m, **controller.settings(),
+                           "settings_from": settings_from or {}},
               "maps": {}}
     pooled: Dict[str, List] = {"overall": [], "desert": [], "urban": []}
     trajectories = {}

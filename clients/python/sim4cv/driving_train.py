@@ -8,7 +8,8 @@ on datasets written by sim4cv.driving_dataset.
 
 L2 (MSE) loss on the 8 offsets v1 h1 ... v4 h4, Adam, the validation loss
 after every epoch, early stopping on it (the best state is kept). Writes
-OUT/model.pt (state dict + settings), OUT/model.onnx (export_onnx) and
+OUT/model.pt (state dict + settings), OUT/model.onnx (export_onnx),
+OUT/model.json (the model card: sim4cv.driving_card) and
 OUT/training.json (per-epoch losses, samples/s, seconds, settings, best epoch).
 
 Refusals (exit status 2, "error: ..."): a dataset folder without labels.csv,
@@ -30,6 +31,7 @@ import numpy as np
 import torch
 from torch.utils.data import ConcatDataset, DataLoader, Dataset, WeightedRandomSampler
 
+from sim4cv import driving_card
 from sim4cv.driving_net import DEFAULT_HEIGHT, DEFAULT_WIDTH, WaypointNet, export_onnx
 
 TARGETS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
@@ -287,10 +289,12 @@ def _write(out, model, best_state, settings, history, best_epoch, best, epochs, 
     snapshot.eval()
     _save(os.path.join(out, "model.pt"), best_state, settings, best_epoch)
     export_onnx(snapshot, os.path.join(out, "model.onnx"), settings["height"], settings["width"])
+    # a new network: its card has the paper's controller until one is chosen in closed loop
+    driving_card.write(out, settings["height"], settings["width"], settings["goal"])
     meta = dict(settings=settings, epochs=history, best_epoch=best_epoch, best_val_loss=best, finished=finished,
                 stopped_early=finished and len(history) < epochs,
                 samples_per_s=(sum(e["train_samples_per_s"] or 0 for e in history) / len(history)),
-                outputs=["model.pt", "model.onnx", "training.json"])
+                outputs=["model.pt", "model.onnx", "model.json", "training.json"])
     with open(os.path.join(out, "training.json"), "w") as f:
         json.dump(meta, f, indent=2)
     return meta
