@@ -44,6 +44,9 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--obstacles", type=int, default=0,
                    help="cars parked in the lane per route, placed as the dataset places them (with --seed)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--transport", choices=de.TRANSPORTS, default="tcp",
+                   help="the one connection to each daemon: tcp, or udp (frames, Steps and Controls on one UDP "
+                        "socket, lockstep: the same laps as over TCP)")
     dc.add_arguments(p)
     a = p.parse_args(argv)
     if a.policy == "network" and not a.model:
@@ -64,10 +67,11 @@ def evaluate_main(argv: List[str]) -> int:
         if "," in a.conditions:
             de.evaluate_conditions(policy, a.maps, surroundings, a.out, [c for c in a.conditions.split(",") if c],
                                    a.speed, a.frame_hz, obstacles=a.obstacles, seed=a.seed,
-                                   controller=controller, settings_from=settings_from)
+                                   controller=controller, settings_from=settings_from, transport=a.transport)
         else:
             de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz,
-                        obstacles=a.obstacles, seed=a.seed, controller=controller, settings_from=settings_from)
+                        obstacles=a.obstacles, seed=a.seed, controller=controller, settings_from=settings_from,
+                        transport=a.transport)
     except (de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

@@ -142,6 +142,7 @@ def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, 
             else:
                 policy.lane = side
                 w = policy.waypoints(frame.image("rgb"), (x, y, yaw), None)
+            de.check_waypoints(w, policy, "frame %d" % frame.frame_id)
             steering, throttle, brake = controller.controls(w, speed=car_speed, max_speed=speed)
         counts["policy_s"] += time.perf_counter() - started
         counts["age_ns"] += time.monotonic_ns() - frame.render_end_mono_ns
