@@ -23,7 +23,7 @@ OUTPUTS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
 # The settings a card's "controller" holds: card key -> (command-line dest,
 # flag, built-in default, check). The defaults are the paper's rule at 8 m/s, 30 Hz.
 SETTINGS = {
-    "steer_waypoint": ("steer_waypoint", "--steer-waypoint", 1, lambda v: v in (1, 2, 3, 4)),
+    "steer_waypoint": ("steer_waypoint", "--steer-waypoint", 1, lambda v: 1 <= v <= 4),
     "steer_gain": ("steer_gain", "--steer-gain", 1.0, lambda v: v > 0),
     "turn_slowdown": ("turn_slowdown", "--turn-slowdown", 0.0, lambda v: v >= 0),
     "speed_m_s": ("speed", "--speed", 8.0, lambda v: v > 0),
@@ -88,7 +88,8 @@ def apply(args, card: Optional[dict]) -> Dict[str, str]:
         if getattr(args, dest) is not None:
             sources[key] = flag
         elif card is not None and key in card["controller"]:
-            setattr(args, dest, type(default)(card["controller"][key]))
+            value = card["controller"][key]
+            setattr(args, dest, value if isinstance(default, int) and value != int(value) else type(default)(value))
             sources[key] = "model card %s" % card["path"]
         else:
             setattr(args, dest, default)
