@@ -20,31 +20,19 @@ from sim4cv import sim4cv_pb2 as pb  # noqa: E402
 from sim4cv.daemon import OwnDaemon  # noqa: E402
 from sim4cv.errors import ServerError  # noqa: E402
 
-# A ring with a crossroads at the origin (tile 2,2); turn_left comes from the west and turns left (north).
-CROSSROADS = """sim4cv-map 1
-name crossroads
-grid 5 5
-#####
-#.#.#
-#####
-#.#.#
-#####
-end
-route loop closed
-tiles 0,0 1,0 2,0 3,0 4,0 4,1 4,2 4,3 4,4 3,4 2,4 1,4 0,4 0,3 0,2 0,1
-route turn_left open
-tiles 0,2 1,2 2,2 2,1 2,0
-"""
+# test_driving_guided's lattice: a ring of 5 x 5 tiles with a crossroads at the origin (tile 2,2);
+# its route "left" comes from the south and turns left (west) there.
+from test_driving_guided import LATTICE  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def setup(tmp_path_factory):
-    path = tmp_path_factory.mktemp("road") / "crossroads.map"
-    path.write_text(CROSSROADS)
+    path = tmp_path_factory.mktemp("road") / "lattice.map"
+    path.write_text(LATTICE)
     with OwnDaemon(["--map", str(path), "--traffic-cars", "0", "--traffic-parked", "0",
                     "--traffic-pedestrians", "0"], mode="lockstep") as daemon, \
             sim4cv.connect(daemon.address, name="road_route_test", timeout=30.0) as client:
-        yield client, dd.RoutePath(dd.parse_map(str(path)), "turn_left")
+        yield client, dd.RoutePath(dd.parse_map(str(path)), "left")
 
 
 def _route_deviation(path, x, y):
@@ -54,11 +42,11 @@ def _route_deviation(path, x, y):
 
 def test_after_a_missed_turn_the_offset_is_to_the_routes_lane(setup):
     client, path = setup
-    x, y = 20.0, -2.0  # on the eastbound lane past the crossroads: the car went straight on
+    x, y = 2.0, 20.0  # on the northbound lane past the crossroads: the car went straight on
     plain = client.query_road(x, y)
     assert plain.distance == pytest.approx(0.0, abs=1e-9)
-    routed = client.query_road(x, y, route="turn_left")
-    # the nearest point of the route's lanes: on the left turn's arc (radius 12 m about (-10, 10))
+    routed = client.query_road(x, y, route="left")
+    # the nearest point of the route's lanes: on the left turn's arc (radius 12 m about (-10, -10))
     assert routed.distance == pytest.approx(math.hypot(30.0, 12.0) - 12.0, abs=1e-9)
     assert -routed.lateral_offset == pytest.approx(_route_deviation(path, x, y), abs=1e-9)
 
@@ -72,7 +60,7 @@ def test_through_the_left_turn_the_route_keeps_its_arc(setup):
         u = start + length * k / 40
         x, y, heading = path.point(u)
         px, py = x + 0.3 * math.sin(heading), y - 0.3 * math.cos(heading)  # 0.3 m right of the lane centre
-        routed = client.query_road(px, py, route="turn_left")
+        routed = client.query_road(px, py, route="left")
         assert routed.lateral_offset == pytest.approx(-0.3, abs=1e-9)
         assert -routed.lateral_offset == pytest.approx(_route_deviation(path, px, py), abs=1e-9)
         segments.add(routed.nearest.segment)
@@ -80,12 +68,12 @@ def test_through_the_left_turn_the_route_keeps_its_arc(setup):
     assert len(segments) == 1  # one arc all the way through
     assert len(plain_segments) > 1  # the plain query meets other lanes in the junction
 
-    # the points ahead turn with the route: 4 points from 6 m before the junction end up heading north
+    # the points ahead turn with the route: 4 points from 6 m before the junction end up heading west
     x, y, _ = path.point(start - 6.0)
-    routed = client.query_road(x, y, count=4, step=4.0, route="turn_left")
-    straight = client.query_road(x, y, count=4, step=4.0, heading_deg=0.0)
-    assert routed.ahead[-1].position.y > 0.0 and routed.ahead[-1].heading_deg > 45  # into the turn
-    assert straight.ahead[-1].position.y == pytest.approx(-2.0, abs=1e-9)
+    routed = client.query_road(x, y, count=4, step=4.0, route="left")
+    straight = client.query_road(x, y, count=4, step=4.0, heading_deg=90.0)
+    assert routed.ahead[-1].position.x < 0.0 and routed.ahead[-1].heading_deg > 135  # into the turn
+    assert straight.ahead[-1].position.x == pytest.approx(2.0, abs=1e-9)
 
 
 def test_an_unknown_route_is_refused_naming_the_maps_routes(setup):
@@ -93,4 +81,4 @@ def test_an_unknown_route_is_refused_naming_the_maps_routes(setup):
     with pytest.raises(ServerError) as e:
         client.query_road(0.0, 0.0, route="turn_right")
     assert e.value.code == pb.ERROR_CODE_INVALID_ARGUMENT
-    assert "QueryRoad.route 'turn_right': scene 'crossroads' has no such route; its routes: 'loop', 'turn_left'" in str(e.value)
+    assert "QueryRoad.route 'turn_right': scene 'lattice' has no such route; its routes: 'loop', 'left'," in str(e.value)
