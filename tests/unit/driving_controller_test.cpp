@@ -119,6 +119,9 @@ TEST(DrivingControllerTest, SteeringMayAimAtAFartherWaypoint) {
   const sim4cv::driving::Controller controller(params);
   const sim4cv::driving::Waypoints w{2.0f, 0.5f, 4.0f, 2.0f, 6.0f, 0.0f, 8.0f, 0.0f};
   EXPECT_NEAR(controller.FromWaypoints(w).steering, std::atan(0.5) * 180.0 / 3.14159265358979 / 35.0, 1e-6);
+  params.steer_waypoint = 1.5;  // halfway between (2, 0.5) and (4, 2): (3, 1.25), as driving_control.aim_point
+  EXPECT_NEAR(sim4cv::driving::Controller(params).FromWaypoints(w).steering,
+              std::atan2(1.25, 3.0) * 180.0 / 3.14159265358979 / 35.0, 1e-6);
   params.steer_waypoint = 5;
   try {
     sim4cv::driving::Controller bad(params);

@@ -27,7 +27,7 @@ struct ControllerParams {
   double t_max = 1.0;              // throttle on a straight (h4 = 0)
   double t_min = 0.3;              // throttle floor
   double k = 0.25;                 // throttle lost per metre of |h4|
-  int steer_waypoint = 1;          // the waypoint the steering aims at, 1 (the paper) ... 4
+  double steer_waypoint = 1;       // the waypoint the steering aims at, 1 (the paper) ... 4; 1.5: halfway between 1 and 2
 };
 
 struct DriveControls {

@@ -34,7 +34,7 @@ struct Options {
   std::string model, frames, controls, car, camera;
   // Unset: the model card's (model.json beside the model), else the paper's rule at 8 m/s.
   std::optional<double> max_speed;     // m/s, as sim4cv.driving drive and evaluate
-  std::optional<int> steer_waypoint;   // 1: the paper's rule; 2 is steadier with a noisy first waypoint
+  std::optional<double> steer_waypoint;  // 1: the paper's rule; 2 is steadier with a noisy first waypoint
   std::optional<double> steer_gain;    // 1: the paper's rule
   int goal = 0;
   bool left_lane = false;
@@ -73,7 +73,7 @@ Options ParseArgs(int argc, char** argv) {
     } else if (flag == "--max-speed") {
       o.max_speed = ParseNumber(flag, value, 0.1, 100.0);
     } else if (flag == "--steer-waypoint") {
-      o.steer_waypoint = static_cast<int>(ParseNumber(flag, value, 1, 4));
+      o.steer_waypoint = ParseNumber(flag, value, 1, 4);
     } else if (flag == "--steer-gain") {
       o.steer_gain = ParseNumber(flag, value, 0.01, 10.0);
     } else if (flag == "--goal") {

@@ -70,8 +70,8 @@ std::optional<ModelCard> ReadModelCard(const std::string& model_path) {
                        (std::isnan(v) ? std::string("(not a number)") : Describe(v)));
     };
     if (key == "steer_waypoint") {
-      if (!(v >= 1 && v <= 4 && v == std::floor(v))) throw bad();
-      card.steer_waypoint = static_cast<int>(v);
+      if (!(v >= 1 && v <= 4)) throw bad();
+      card.steer_waypoint = v;
     } else if (key == "steer_gain" || key == "speed_m_s" || key == "frame_hz") {
       if (!(v > 0 && std::isfinite(v))) throw bad();
       (key == "steer_gain" ? card.steer_gain : key == "speed_m_s" ? card.speed_m_s : card.frame_hz) = v;

@@ -26,7 +26,7 @@ struct ModelCard {
   int width = 0;
   bool goal = false;
   // The "controller" object's settings; unset when the card leaves them out.
-  std::optional<int> steer_waypoint;      // 1 ... 4
+  std::optional<double> steer_waypoint;   // 1 ... 4 (a fraction: between two waypoints)
   std::optional<double> steer_gain;       // > 0
   std::optional<double> turn_slowdown;    // >= 0 (sim4cv_drive supports only 0)
   std::optional<double> speed_m_s;        // > 0, the speed cap
