@@ -58,7 +58,6 @@ def evaluate_main(argv: List[str]) -> int:
             policy, card = de.ReferencePolicy(), None
         else:
             policy = de.NetworkPolicy(a.model, lane=a.lane)
-            policy.path = a.model
             card = dcard.for_model(a.model, (policy.height, policy.width, policy.use_goal))
         settings_from = dcard.apply(a, card)
         controller = dc.from_arguments(p, a)

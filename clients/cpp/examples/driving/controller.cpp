@@ -9,6 +9,8 @@ namespace sim4cv::driving {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kMinTurnSpeed = 4.0;            // driving_control.MIN_TURN_SPEED, m/s
+constexpr double kBrakePerMetrePerSecond = 0.5;  // driving_control.BRAKE_PER_M_S
 
 // Python's min(a, b) and max(a, b): the first argument unless the second is
 // strictly smaller (larger). With a NaN these return the bound where
@@ -33,6 +35,9 @@ Controller::Controller(ControllerParams params) : params_(params) {
   if (!(0 <= params_.t_min && params_.t_min <= params_.t_max && params_.t_max <= 1)) {
     throw std::invalid_argument("Controller: need 0 <= t_min <= t_max <= 1, got " + Number(params_.t_min) + ", " +
                                 Number(params_.t_max));
+  }
+  if (!(params_.slowdown >= 0)) {
+    throw std::invalid_argument("Controller: slowdown must be >= 0, got " + Number(params_.slowdown));
   }
   if (!(params_.steer_waypoint >= 1 && params_.steer_waypoint <= 4)) {
     throw std::invalid_argument("Controller: steer_waypoint must be 1 ... 4, got " + Number(params_.steer_waypoint));
@@ -60,7 +65,13 @@ DriveControls Controller::FromWaypoints(const Waypoints& w, std::optional<double
     v += f * (static_cast<double>(w[2 * k + 2]) - v);
     h += f * (static_cast<double>(w[2 * k + 3]) - h);
   }
-  return {Steering(v, h), Throttle(w[7], speed, max_speed), 0.0};
+  double brake = 0.0;
+  if (params_.slowdown != 0 && max_speed) {
+    // driving_control.turn_speed_cap, and the brake down to it
+    max_speed = PyMax(PyMin(kMinTurnSpeed, *max_speed), *max_speed - params_.slowdown * std::fabs(w[7]));
+    if (speed && *speed > *max_speed) brake = PyMin(1.0, kBrakePerMetrePerSecond * (*speed - *max_speed));
+  }
+  return {Steering(v, h), Throttle(w[7], speed, max_speed), brake};
 }
 
 }  // namespace sim4cv::driving

@@ -36,6 +36,7 @@ struct Options {
   std::optional<double> max_speed;     // m/s, as sim4cv.driving drive and evaluate
   std::optional<double> steer_waypoint;  // 1: the paper's rule; 2 is steadier with a noisy first waypoint
   std::optional<double> steer_gain;    // 1: the paper's rule
+  std::optional<double> turn_slowdown;  // 0: the paper's throttle
   int goal = 0;
   bool left_lane = false;
   long frames_count = 0;  // 0: until Ctrl-C
@@ -76,6 +77,8 @@ Options ParseArgs(int argc, char** argv) {
       o.steer_waypoint = ParseNumber(flag, value, 1, 4);
     } else if (flag == "--steer-gain") {
       o.steer_gain = ParseNumber(flag, value, 0.01, 10.0);
+    } else if (flag == "--turn-slowdown") {
+      o.turn_slowdown = ParseNumber(flag, value, 0.0, 100.0);
     } else if (flag == "--goal") {
       if (value != "-1" && value != "0" && value != "1")
         throw UsageError("--goal wants -1, 0 or 1, got '" + value + "'");
@@ -165,9 +168,6 @@ int Run(const Options& o) {
   }
   const std::optional<driving::ModelCard> card = driving::ReadModelCard(o.model);
   if (card) card->CheckModel(model.height(), model.width(), model.has_goal());
-  if (card && card->turn_slowdown.value_or(0) != 0)
-    throw std::runtime_error("model card " + card->path + " asks for turn_slowdown " +
-                             std::to_string(*card->turn_slowdown) + "; sim4cv_drive has no turn slowdown");
   std::string settings = "settings:";
   // A flag, else the card, else the default; each printed with where it came from.
   const auto choose = [&](const char* name, auto flag, auto from_card, auto fallback) {
@@ -182,6 +182,8 @@ int Run(const Options& o) {
   params.steer_waypoint = choose("steer_waypoint", o.steer_waypoint,
                                  card ? card->steer_waypoint : std::nullopt, params.steer_waypoint);
   params.gain = choose("steer_gain", o.steer_gain, card ? card->steer_gain : std::nullopt, params.gain);
+  params.slowdown = choose("turn_slowdown", o.turn_slowdown, card ? card->turn_slowdown : std::nullopt,
+                           params.slowdown);
   const double max_speed = choose("speed_m_s", o.max_speed, card ? card->speed_m_s : std::nullopt, 8.0);
   const driving::Controller controller(params);
   std::printf("model %s: %dx%d RGB%s\n%s\n", o.model.c_str(), model.width(), model.height(),
@@ -313,8 +315,9 @@ int main(int argc, char** argv) {
     if (*e.what() != '\0') std::cerr << "sim4cv_drive: " << e.what() << "\n";
     std::cerr << "usage: sim4cv_drive --model FILE.onnx --frames ADDRESS [--controls ADDRESS] --car NAME_OR_ID "
                  "--camera NAME [--add-camera] [--max-speed M/S] [--goal -1|0|1] [--lane left|right] "
-                 "[--steer-waypoint 1-4] [--steer-gain G] [--frames-count N] [--lockstep]\n"
-                 "  unset --max-speed, --steer-waypoint, --steer-gain: model.json beside the model, else 8, 1, 1\n"
+                 "[--steer-waypoint 1-4] [--steer-gain G] [--turn-slowdown S] [--frames-count N] [--lockstep]\n"
+                 "  unset --max-speed, --steer-waypoint, --steer-gain, --turn-slowdown: model.json beside the "
+                 "model, else 8, 1, 1, 0\n"
                  "  ADDRESS: tcp://HOST:PORT, udp://HOST:PORT or shm://NAME; --controls defaults to the daemon's UDP "
                  "port\n";
     return 2;

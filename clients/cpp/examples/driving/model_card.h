@@ -28,7 +28,7 @@ struct ModelCard {
   // The "controller" object's settings; unset when the card leaves them out.
   std::optional<double> steer_waypoint;   // 1 ... 4 (a fraction: between two waypoints)
   std::optional<double> steer_gain;       // > 0
-  std::optional<double> turn_slowdown;    // >= 0 (sim4cv_drive supports only 0)
+  std::optional<double> turn_slowdown;    // >= 0
   std::optional<double> speed_m_s;        // > 0, the speed cap
   std::optional<double> frame_hz;         // > 0, the evaluation's frame rate (not used when driving)
 
