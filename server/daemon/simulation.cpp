@@ -322,13 +322,9 @@ void Simulation::SetRoute(const proto::SetRoute& route) {
   } else {
     const map::Route* named = scene_->map ? scene_->map->FindRoute(route.route_name()) : nullptr;
     if (!named) {
-      std::string names;
-      if (scene_->map) {
-        for (const auto& r : scene_->map->routes) names += (names.empty() ? "'" : ", '") + r.name + "'";
-      }
-      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
-                           "SetRoute.route_name '" + route.route_name() + "': scene '" + scene_->name +
-                               "' has no such route; its routes: " + (names.empty() ? "none" : names));
+      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "SetRoute.route_name '" + route.route_name() +
+                                                                   "': scene '" + scene_->name +
+                                                                   "' has no such route; its routes: " + RouteNames());
     }
     points = Checked([&] { return scene_->road_graph->SampleRoute(*named, 1.0).points; });
     closed = named->closed;
@@ -474,15 +470,37 @@ void Simulation::QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult
   }
   const map::RoadGraph& graph = *scene_->road_graph;
   const Eigen::Vector2d point(query.point().x(), query.point().y());
+  std::vector<map::SegmentId> route;
+  if (!query.route().empty()) {
+    const map::Route* named = scene_->map ? scene_->map->FindRoute(query.route()) : nullptr;
+    if (!named) {
+      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "QueryRoad.route '" + query.route() + "': scene '" +
+                                                                   scene_->name + "' has no such route; its routes: " +
+                                                                   RouteNames());
+    }
+    route = Checked([&] { return graph.RouteSegments(*named); });
+  }
   const map::LaneProjection nearest =
-      query.use_heading() ? graph.Nearest(point, query.heading_deg() * kDegrees) : graph.Nearest(point);
+      !route.empty()      ? graph.NearestOnRoute(point, route)
+      : query.use_heading() ? graph.Nearest(point, query.heading_deg() * kDegrees)
+                            : graph.Nearest(point);
   SetLanePoint(nearest.lane, *out.mutable_nearest());
   out.set_distance(nearest.distance);
   out.set_lateral_offset(nearest.lateral_offset);
   if (query.count() == 0) return;
-  for (const map::LanePoint& ahead : graph.PointsAhead(nearest.lane, query.step(), static_cast<int>(query.count()))) {
+  const int count = static_cast<int>(query.count());
+  for (const map::LanePoint& ahead : route.empty() ? graph.PointsAhead(nearest.lane, query.step(), count)
+                                                   : graph.PointsAlongRoute(nearest.lane, query.step(), count, route)) {
     SetLanePoint(ahead, *out.add_ahead());
   }
+}
+
+std::string Simulation::RouteNames() const {
+  std::string names;
+  if (scene_->map) {
+    for (const auto& r : scene_->map->routes) names += (names.empty() ? "'" : ", '") + r.name + "'";
+  }
+  return names.empty() ? "none" : names;
 }
 
 // Checked by CheckConfigure (names and ranges) before it gets here.

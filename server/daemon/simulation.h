@@ -95,6 +95,8 @@ class Simulation {
   void RemoveEntity(uint32_t id, Change& change);
   void LoadMap(const proto::LoadMap& load, Change& change);
   void QueryRoad(const proto::QueryRoad& query, proto::RoadQueryResult& out) const;
+  // The map's route names, quoted, for an Error ("none" without a map or routes).
+  std::string RouteNames() const;
   void SetConditions(const proto::SetConditions& request, Change& change);
   void SetEffects(const proto::CameraEffects& request, Change& change);
   const sim::Entity& EntityOf(uint32_t id, const char* what) const;

@@ -237,6 +237,7 @@ std::string CheckQueryRoad(const proto::QueryRoad& query) {
   check.Vec("QueryRoad.point", query.point()).Finite("QueryRoad.heading_deg", query.heading_deg());
   check.Range("QueryRoad.count", query.count(), 0, limits::kMaxRoadQueryPoints);
   if (query.count() > 0) check.Range("QueryRoad.step", query.step(), 1e-3, 50);
+  check.Name("QueryRoad.route", query.route(), true);
   return check.problem();
 }
 

@@ -125,6 +125,11 @@ export class Driving {
     menu.innerHTML = cars.map((e) => `<option value="${e.id}">${e.id} ${e.name}</option>`).join("") ||
       `<option value="">(no car: spawn one)</option>`;
     if (cars.some((e) => String(e.id) === current)) menu.value = current;
+    // The map's routes: the score can follow one (QueryRoad.route) instead of the nearest lane.
+    const routes = $("drive-route"), chosen = routes.value;
+    routes.replaceChildren(new Option("score: nearest lane", ""),
+                           ...(world.routes || []).map((name) => new Option(`score: route ${name}`, name)));
+    if ((world.routes || []).includes(chosen)) routes.value = chosen;
   }
 
   // A car clicked on the map becomes the one to drive (not while driving).
@@ -168,8 +173,9 @@ export class Driving {
     }
     const camera = await this.ensureCamera(info, $("drive-view").value);
     this.car = { id: info.id, name: info.name };
+    this.route = $("drive-route").value;
     this.score = new DriveScore({ car: info.name, car_id: info.id, scene: this.app.world.scene_name, camera,
-                                  started: new Date().toISOString() });
+                                  route: this.route || null, started: new Date().toISOString() });
     this.roadProblem = false;
     this.stopNote = "";
     this.speed = 0;
@@ -253,8 +259,10 @@ export class Driving {
       this.speed = Math.hypot(v.x || 0, v.y || 0);
       let deviation = null;
       try {
-        const answer = await this.socket.configure({
-          query_road: { point: { x: p.x || 0, y: p.y || 0, z: 0 }, heading_deg: yaw, use_heading: true } });
+        const point = { x: p.x || 0, y: p.y || 0, z: 0 };
+        // Along a route its lane is the measure (a missed turn is off it); else the nearest lane this way.
+        const query = this.route ? { point, route: this.route } : { point, heading_deg: yaw, use_heading: true };
+        const answer = await this.socket.configure({ query_road: query });
         deviation = -(answer.road?.lateral_offset || 0);  // + right of the direction of travel, as driving_metrics
       } catch (error) {
         if (!this.roadProblem) this.app.reportError(error, "Drive score (QueryRoad)");
@@ -281,7 +289,7 @@ export class Driving {
   show(note = null) {
     $("drive-start").textContent = this.active ? "stop driving" : "drive";
     $("drive-start").classList.toggle("driving", this.active);
-    $("drive-car").disabled = $("drive-view").disabled = this.active;
+    $("drive-car").disabled = $("drive-view").disabled = $("drive-route").disabled = this.active;
     $("drive-download").classList.toggle("hidden", !this.score);
     this.showStatus(note);
     this.showScore();

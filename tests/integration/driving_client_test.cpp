@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "tests/integration/daemon_fixture.h"
@@ -105,6 +106,38 @@ TEST_F(DrivingClientTest, DrivesAParkedCarInLockstep) {
   // Parked (brake on) until it gets Controls; the controller's throttle is
   // at least 0.3 below the speed cap, so in 2 s it must have moved.
   EXPECT_GT(Moved(parked, *after), 0.5) << after->ShortDebugString() << "\n" << run.output;
+}
+
+TEST_F(DrivingClientTest, TakesUnsetSettingsFromTheModelCardAndFlagsWin) {
+  const fs::path carded = *model_dir_ / "carded";
+  fs::create_directories(carded);
+  fs::copy_file(*model_dir_ / "small.onnx", carded / "model.onnx", fs::copy_options::overwrite_existing);
+  std::ofstream(carded / "model.json") << R"({"format": "sim4cv driving model card 1", "input": {"height": 90, )"
+                                          R"("width": 160, "goal": false}, "controller": {"steer_waypoint": 3, )"
+                                          R"("steer_gain": 0.5, "speed_m_s": 5}})";
+  StartDaemon({"--mode", "lockstep"});
+  auto client = Connect("driving-test");
+  proto::EntityState parked;
+  SpawnEgo(*client, parked);
+  const std::string tcp = "tcp://127.0.0.1:" + std::to_string(daemon_->tcp_port());
+  const std::string command = std::string(SIM4CV_DRIVE) + " --model '" + (carded / "model.onnx").string() +
+                              "' --frames " + tcp + " --car ego --camera ego_cam --add-camera --lockstep " +
+                              "--frames-count 5 --steer-gain 0.7";
+  const Exit run = RunCommand(command);
+  ASSERT_EQ(run.status, 0) << run.output;
+  const std::string card = (carded / "model.json").string();
+  EXPECT_NE(run.output.find("steer_waypoint 3 (model card " + card + ")"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("steer_gain 0.7 (flag)"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("speed_m_s 5 (model card " + card + ")"), std::string::npos) << run.output;
+
+  // a card of another network is refused, naming it
+  std::ofstream(carded / "model.json") << R"({"format": "sim4cv driving model card 1", "input": {"height": 180, )"
+                                          R"("width": 320, "goal": false}, "controller": {}})";
+  const Exit refused = RunCommand(command);
+  EXPECT_EQ(refused.status, 1) << refused.output;
+  EXPECT_NE(refused.output.find("model card " + card + " describes a 320x180 network, but the model is a 160x90 network"),
+            std::string::npos)
+      << refused.output;
 }
 
 TEST_F(DrivingClientTest, DrivesInRealtimeWithUdpControlsAndTheLaneFlip) {

@@ -184,3 +184,18 @@ def test_the_shipped_model_drives_a_lap_of_a_test_map(tmp_path):
                          str(tmp_path), controller=dc.Controller(steer_waypoint=2), log=lambda *a: None)
     o = report["overall"]
     assert o["completed"] == 1 and o["mean_deviation_cm"] < 30.0 and o["within_1m"] > 0.97
+
+
+def test_a_lap_over_udp_is_the_lap_over_tcp_frame_for_frame(tmp_path):
+    # frames, Steps and Controls on one UDP socket, lockstep: every frame's
+    # pose, deviation and controls equal those of the TCP lap, exactly
+    policy = de.NetworkPolicy(os.path.join(SHIPPED, "model.onnx"))
+    lap = os.path.join(REPO_ROOT, "scenes", "driving", "test", "01_urban.map")
+    reports = {t: de.evaluate(policy, [lap], ["urban"], str(tmp_path / t), controller=dc.Controller(2, 0.9),
+                              log=lambda *a: None, transport=t) for t in ("tcp", "udp")}
+    assert reports["udp"]["settings"]["transport"] == "udp"
+    rows = {t: (tmp_path / t / "runs" / "driving_test_01_urban_loop.csv").read_text() for t in reports}
+    assert rows["udp"].count("\n") > 1000 and rows["udp"] == rows["tcp"]
+    assert reports["udp"]["overall"] == reports["tcp"]["overall"]
+    with pytest.raises(de.EvalError, match="transport 'shm': one of tcp, udp"):
+        de.evaluate(policy, [lap], ["urban"], str(tmp_path / "shm"), transport="shm")

@@ -14,6 +14,7 @@ sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 
 torch = pytest.importorskip("torch")
 
+from sim4cv import driving_card as dcard  # noqa: E402
 from sim4cv import driving_dataset as dd  # noqa: E402
 from sim4cv import driving_head as dh  # noqa: E402
 from sim4cv import driving_net as dn  # noqa: E402
@@ -48,6 +49,7 @@ def test_only_the_head_moves_and_the_features_are_cached(trained, tmp_path):
         stored = json.load(f)
     assert stored == json.loads(json.dumps(meta)) and len(stored["epochs"]) == 3
     assert stored["settings"]["head_only"] and stored["settings"]["goal"] and stored["settings"]["train_samples"] == 18
+    assert dcard.read(str(tmp_path / "m" / "model.pt"))["input"]["goal"] is True  # head writes the card too
     # model.pt is the best epoch by validation loss (0: the init model itself), model.onnx the same weights
     best = min([(e["val_loss"], e["epoch"]) for e in stored["epochs"]] + [(float("inf"), 0)])[1]
     assert stored["best_epoch"] == best

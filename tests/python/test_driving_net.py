@@ -222,3 +222,14 @@ def test_the_controllers_options_are_one_list_for_every_command(capsys):
     with pytest.raises(SystemExit) as e:
         driving.main(["evaluate", "--policy", "reference", "--out", "/nonexistent/x", "--steer-gain", "0"])
     assert e.value.code == 2 and "gain must be positive, got 0.0" in capsys.readouterr().err
+
+
+def test_the_steering_may_aim_between_two_waypoints():
+    w = [2.0, 0.5, 4.0, 2.0, 6.0, 0.0, 8.0, 0.0]
+    # 1.5: halfway between (2, 0.5) and (4, 2), i.e. (3, 1.25)
+    assert dc.controls_from_waypoints(w, steer_waypoint=1.5)[0] == pytest.approx(
+        math.degrees(math.atan2(1.25, 3.0)) / 35.0)
+    assert dc.aim_point(w, 2.0) == (4.0, 2.0) and dc.aim_point(w, 4) == (8.0, 0.0)
+    assert dc.aim_point(w, 3.25) == pytest.approx((6.5, 0.0))
+    with pytest.raises(ValueError, match="steer_waypoint must be 1 ... 4, got 4.5"):
+        dc.Controller(steer_waypoint=4.5)

@@ -16,6 +16,7 @@ sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 
 torch = pytest.importorskip("torch")
 
+from sim4cv import driving_card as dcard  # noqa: E402
 from sim4cv import driving_dataset as dd  # noqa: E402
 from sim4cv import driving_net as dn  # noqa: E402
 from sim4cv import driving_train as dt  # noqa: E402
@@ -45,6 +46,11 @@ def test_train_two_epochs_and_export(dataset, tmp_path):
         assert e["train_samples_per_s"] > 0 and e["seconds"] > 0
     s = stored["settings"]
     assert (s["height"], s["width"], s["downscale"], s["train_samples"]) == (90, 160, 2, 18)
+    # the model card beside it: the network's contract, the paper's controller, not yet selected
+    card = dcard.read(str(out / "model.onnx"))
+    assert (card["input"]["height"], card["input"]["width"], card["input"]["goal"]) == (90, 160, False)
+    assert card["input"]["channels"] == "RGB" and card["controller"]["steer_waypoint"] == 1
+    assert card["selected"]["status"].startswith("not selected")
 
     model = dt.load_model(str(out / "model.pt"))
     run = dn.load_onnx_with_opencv(str(out / "model.onnx"), use_goal=False)

@@ -236,6 +236,23 @@ def test_a_key_press_drives_the_car_and_the_score_counts(page, client):
     assert page.evaluate("studio.errors") == []
 
 
+def test_the_score_can_measure_to_a_routes_lane(page, client):
+    # The car stands on the east road, far from the route "loop": scored against
+    # the loop's lane (QueryRoad.route), each sample is the distance to it.
+    page.wait_for("[...document.getElementById('drive-route').options].some(o => o.value === 'loop')", TIMEOUT_S)
+    choose(page, "#drive-route", "loop")
+    press(page, "#drive-start")
+    page.wait_for("studio.driving.active && studio.driving.score.samples.length > 2", TIMEOUT_S)
+    press(page, "#drive-start")
+    run = page.evaluate("JSON.parse(JSON.stringify(studio.driving.score))")
+    assert run["route"] == "loop"
+    x, y, deviation = (run["samples"][-1][i] for i in (1, 2, 5))
+    assert abs(deviation) > 50.0  # the loop runs at x = -48, the car at x = 112
+    assert deviation == pytest.approx(-client.query_road(x, y, route="loop").lateral_offset, abs=1e-6)
+    choose(page, "#drive-route", "")
+    assert page.evaluate("studio.errors") == []
+
+
 def test_a_car_another_client_drives_is_refused_with_the_daemons_error(page, client):
     car = int(page.evaluate("document.getElementById('drive-car').value"))
     # Stopping closed the page's driver session, so the car is free at once: the checker drives it now.

@@ -119,6 +119,9 @@ TEST(DrivingControllerTest, SteeringMayAimAtAFartherWaypoint) {
   const sim4cv::driving::Controller controller(params);
   const sim4cv::driving::Waypoints w{2.0f, 0.5f, 4.0f, 2.0f, 6.0f, 0.0f, 8.0f, 0.0f};
   EXPECT_NEAR(controller.FromWaypoints(w).steering, std::atan(0.5) * 180.0 / 3.14159265358979 / 35.0, 1e-6);
+  params.steer_waypoint = 1.5;  // halfway between (2, 0.5) and (4, 2): (3, 1.25), as driving_control.aim_point
+  EXPECT_NEAR(sim4cv::driving::Controller(params).FromWaypoints(w).steering,
+              std::atan2(1.25, 3.0) * 180.0 / 3.14159265358979 / 35.0, 1e-6);
   params.steer_waypoint = 5;
   try {
     sim4cv::driving::Controller bad(params);
@@ -126,4 +129,23 @@ TEST(DrivingControllerTest, SteeringMayAimAtAFartherWaypoint) {
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "Controller: steer_waypoint must be 1 ... 4, got 5");
   }
+}
+
+TEST(DrivingControllerTest, TurnSlowdownLowersTheCapAndBrakesDownToIt) {
+  // driving_control's cases (tests/python/test_driving_net.py): the right turn of radius 20 m, h4 = 1.58
+  const sim4cv::driving::Waypoints turn{2.00f, 0.10f, 3.97f, 0.40f, 5.91f, 0.89f, 7.79f, 1.58f};
+  sim4cv::driving::ControllerParams params;
+  params.slowdown = 2.0;
+  const sim4cv::driving::Controller controller(params);
+  const auto fast = controller.FromWaypoints(turn, 6.0, 8.0);  // cap 8 - 2 * 1.58 = 4.84 m/s
+  EXPECT_GT(fast.steering, 0);
+  EXPECT_EQ(fast.throttle, 0.0);
+  EXPECT_NEAR(fast.brake, 0.5 * (6.0 - (8.0 - 2.0 * 1.58f)), 1e-6);
+  const auto slow = controller.FromWaypoints(turn, 4.0, 8.0);
+  EXPECT_NEAR(slow.throttle, 1.0 - 0.25 * 1.58f, 1e-6);
+  EXPECT_EQ(slow.brake, 0.0);
+  EXPECT_EQ(controller.FromWaypoints(turn, 20.0, 8.0).brake, 1.0);
+  EXPECT_EQ(sim4cv::driving::Controller().FromWaypoints(turn, 20.0, 8.0).brake, 0.0);  // off by default
+  params.slowdown = -1;
+  EXPECT_THROW(sim4cv::driving::Controller{params}, std::invalid_argument);
 }

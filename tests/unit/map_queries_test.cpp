@@ -145,6 +145,28 @@ TEST_F(JunctionTest, CallbackSeesTheOptionsInTurnOrder) {
   EXPECT_THROW(graph_.PointsAhead(start_, 0, 5), std::invalid_argument);
 }
 
+TEST(RoadQueriesTest, NearestOnARouteStaysOnItsLanesAndItsPointsAheadTurnWithIt) {
+  // From the west, left at the crossroads (tile 2,1 on the origin) into the north arm.
+  const Map map = ParseRows({"..#..", "#####", "..#.."}, 20, "route left open\ntiles 0,1 1,1 2,1 2,0\n");
+  const RoadGraph graph(map);
+  const std::vector<SegmentId> route = graph.RouteSegments(map.routes[0]);
+  ASSERT_EQ(route.size(), 2u);
+  const SegmentId left_turn = Through(graph, {2, 1}, Edge::kWest, Edge::kNorth);
+  EXPECT_EQ(route[1], left_turn);
+  // Straight on past the crossroads, on the eastbound lane of the east arm:
+  // 0 m from some lane, but 20.31 m from the route's (the left turn's arc,
+  // radius 12 m about the crossroads' north-west corner (-10, 10)).
+  EXPECT_NEAR(graph.Nearest({20, -2}).distance, 0, 1e-9);
+  const LaneProjection missed = graph.NearestOnRoute({20, -2}, route);
+  EXPECT_EQ(missed.lane.segment, left_turn);
+  EXPECT_NEAR(missed.distance, std::hypot(30.0, 12.0) - 12, 1e-9);
+  // The points ahead follow the route's turn; plain ones go straight on.
+  const LanePoint before = graph.At(route[0], graph.segment(route[0]).length() - 1);
+  EXPECT_EQ(graph.PointsAlongRoute(before, 2, 3, route).back().segment, left_turn);
+  EXPECT_EQ(graph.segment(graph.PointsAhead(before, 2, 3).back().segment).turn, Turn::kStraight);
+  EXPECT_THROW(graph.NearestOnRoute({0, 0}, {}), std::invalid_argument);
+}
+
 TEST(RoadQueriesTest, MissingTurnFallsBackToStraightThenRight) {
   const Map map = ParseRows({"###", ".#."});  // a T: from the stem only right and left
   const RoadGraph graph(map);

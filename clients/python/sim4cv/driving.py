@@ -20,6 +20,7 @@ import importlib
 import sys
 from typing import List, Optional
 
+from . import driving_card as dcard
 from . import driving_control as dc
 from . import driving_eval as de
 
@@ -32,38 +33,44 @@ def evaluate_main(argv: List[str]) -> int:
     p.add_argument("--maps", nargs="+", default=["test"], help="train, val, test and/or map files")
     p.add_argument("--surroundings", default="desert,urban")
     p.add_argument("--out", required=True)
-    p.add_argument("--speed", type=float, default=de.DEFAULT_SPEED, help="m/s, the controller's cap")
+    p.add_argument("--speed", type=float, help="m/s, the controller's cap (default: the model card's, else 8)")
     p.add_argument("--conditions", default="",
                    help="weather/time-of-day preset (default clear_noon); several, comma-separated: one evaluation "
                         "each into OUT/PRESET/ and a comparison in OUT/conditions.md")
     p.add_argument("--lane", choices=("right", "left"), default="right",
                    help="left: mirror image, goal and h (the lane-change trick); a lap starts on the left lane and is "
                         "scored against its centre")
-    p.add_argument("--frame-hz", type=float, default=30.0)
+    p.add_argument("--frame-hz", type=float, help="the daemon's frame rate (default: the model card's, else 30)")
     p.add_argument("--obstacles", type=int, default=0,
                    help="cars parked in the lane per route, placed as the dataset places them (with --seed)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--transport", choices=de.TRANSPORTS, default="tcp",
+                   help="the one connection to each daemon: tcp, or udp (frames, Steps and Controls on one UDP "
+                        "socket, lockstep: the same laps as over TCP)")
     dc.add_arguments(p)
     a = p.parse_args(argv)
-    controller = dc.from_arguments(p, a)
+    if a.policy == "network" and not a.model:
+        p.error("--policy network needs --model FILE")
+    if a.policy == "network" and a.lane == "left" and a.obstacles:
+        p.error("--lane left drives the left lane, where --obstacles are passed: use one of them")
     try:
         if a.policy == "reference":
-            policy = de.ReferencePolicy()
+            policy, card = de.ReferencePolicy(), None
         else:
-            if not a.model:
-                p.error("--policy network needs --model FILE")
-            if a.lane == "left" and a.obstacles:
-                p.error("--lane left drives the left lane, where --obstacles are passed: use one of them")
             policy = de.NetworkPolicy(a.model, lane=a.lane)
-            policy.path = a.model
+            card = dcard.for_model(a.model, (policy.height, policy.width, policy.use_goal))
+        settings_from = dcard.apply(a, card)
+        controller = dc.from_arguments(p, a)
+        print(dcard.describe(a, settings_from), flush=True)
         surroundings = [s for s in a.surroundings.split(",") if s]
         if "," in a.conditions:
             de.evaluate_conditions(policy, a.maps, surroundings, a.out, [c for c in a.conditions.split(",") if c],
                                    a.speed, a.frame_hz, obstacles=a.obstacles, seed=a.seed,
-                                   controller=controller)
+                                   controller=controller, settings_from=settings_from, transport=a.transport)
         else:
             de.evaluate(policy, a.maps, surroundings, a.out, a.speed, a.conditions, a.frame_hz,
-                        obstacles=a.obstacles, seed=a.seed, controller=controller)
+                        obstacles=a.obstacles, seed=a.seed, controller=controller, settings_from=settings_from,
+                        transport=a.transport)
     except (de.EvalError, RuntimeError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
@@ -81,20 +88,25 @@ def drive_main(argv: List[str]) -> int:
     p.add_argument("--controls", help="udp://HOST:PORT (default: the frames connection)")
     p.add_argument("--car", default="car", help="the car's entity name (default car)")
     p.add_argument("--camera", default="car_front")
-    p.add_argument("--speed", type=float, default=de.DEFAULT_SPEED)
+    p.add_argument("--speed", type=float, help="m/s, the controller's cap (default: the model card's, else 8)")
     p.add_argument("--lockstep", action="store_true", help="step the world; controls over the frames connection")
     p.add_argument("--lane", choices=("right", "left"), default="right")
     p.add_argument("--switch-every", type=float, default=0.0, help="change lanes every S simulated seconds")
     p.add_argument("--seconds", type=float, default=0.0, help="stop after S simulated seconds (0: never)")
     p.add_argument("--frames-count", type=int, default=0, help="stop after N frames (0: never)")
+    dc.add_arguments(p)
     a = p.parse_args(argv)
     try:
         policy = dcl.ReferenceDriver(a.reference) if a.reference else de.NetworkPolicy(a.model)
+        card = None if a.reference else dcard.for_model(a.model, (policy.height, policy.width, policy.use_goal))
+        settings_from = dcard.apply(a, card)
+        controller = dc.from_arguments(p, a)
+        print(dcard.describe(a, settings_from), flush=True)
         lane = dcl.Lane(a.lane, a.switch_every)
         if not a.switch_every:  # type left / right on stdin to change lanes
             lane.listen()
         result = dcl.drive(a.frames, a.controls, policy, a.car, a.camera, a.speed, a.lockstep, a.seconds,
-                           a.frames_count, lane, log=lambda m: print(m, flush=True))
+                           a.frames_count, lane, log=lambda m: print(m, flush=True), controller=controller)
     except (de.EvalError, RuntimeError, OSError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

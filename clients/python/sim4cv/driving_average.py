@@ -24,14 +24,15 @@ class AverageError(RuntimeError):
 def average(paths: Sequence[str], out: str, log=print) -> dict:
     import torch
     from .driving_net import export_onnx
-    from .driving_train import _save, load_model
+    from . import driving_card
+    from .driving_train import TrainError, _save, load_model, load_saved
     if len(paths) < 2:
         raise AverageError("average needs at least 2 models, got %d" % len(paths))
     saved = []
     for p in paths:
         try:
-            saved.append(torch.load(p, map_location="cpu"))
-        except (OSError, RuntimeError, EOFError, ValueError, pickle.UnpicklingError) as e:
+            saved.append(load_saved(p))
+        except (OSError, RuntimeError, EOFError, ValueError, pickle.UnpicklingError, TrainError) as e:
             raise AverageError("%s: not a model.pt (%s)" % (p, e))
         if not isinstance(saved[-1], dict) or "state_dict" not in saved[-1] or "settings" not in saved[-1]:
             raise AverageError("%s: not a model.pt of sim4cv.driving_train (no state_dict and settings)" % p)
@@ -46,8 +47,9 @@ def average(paths: Sequence[str], out: str, log=print) -> dict:
     _save(os.path.join(out, "model.pt"), state, settings, 0)
     model = load_model(os.path.join(out, "model.pt"))
     export_onnx(model, os.path.join(out, "model.onnx"), model.height, model.width)
+    driving_card.write(out, model.height, model.width, model.use_goal)  # a new network: not selected yet
     meta = dict(models=settings["averaged"], height=model.height, width=model.width, goal=model.use_goal,
-                outputs=["model.pt", "model.onnx", "average.json"])
+                outputs=["model.pt", "model.onnx", "model.json", "average.json"])
     with open(os.path.join(out, "average.json"), "w") as f:
         json.dump(meta, f, indent=2)
     log("averaged %d models into %s" % (len(paths), out))

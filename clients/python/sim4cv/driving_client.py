@@ -88,7 +88,8 @@ class ReferenceDriver:
 
 def drive(frames_address: str, controls_address: Optional[str], policy, car: str = "car",
           camera: str = "car_front", speed: float = de.DEFAULT_SPEED, lockstep: bool = False,
-          seconds: float = 0.0, frames: int = 0, lane: Optional[Lane] = None, log=print, recorder=None) -> dict:
+          seconds: float = 0.0, frames: int = 0, lane: Optional[Lane] = None, log=print, recorder=None,
+          controller: dc.Controller = dc.Controller()) -> dict:
     """Drives until `seconds` of simulated time or `frames` frames (0: for ever),
     or until the policy's `done` turns true; returns counts: frames, skipped,
     policy_ms (mean), fps, age_ms (mean frame age at decision).
@@ -96,7 +97,8 @@ def drive(frames_address: str, controls_address: Optional[str], policy, car: str
     A policy has waypoints(rgb, pose, lane_or_progress) (the controller makes
     the Controls) or controls(frame, pose, speed) -> (steering, throttle,
     brake) (e.g. a person at the keyboard). recorder(frame, pose), if given,
-    sees every frame's (x, y, yaw) of the car."""
+    sees every frame's (x, y, yaw) of the car. controller: how waypoints become
+    Controls (the model card's settings, from `drive`)."""
     import sim4cv
     lane = lane or Lane()
     with sim4cv.connect(frames_address, name="driving_client", timeout=30.0) as source:
@@ -107,13 +109,14 @@ def drive(frames_address: str, controls_address: Optional[str], policy, car: str
                                                                                 timeout=10.0)
         try:
             source.subscribe(camera, ["rgb"], "lockstep" if lockstep else "newest", with_state=True)
-            return _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log, recorder)
+            return _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log, recorder,
+                         controller)
         finally:
             if sink is not source:
                 sink.close()
 
 
-def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log, recorder):
+def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, log, recorder, controller):
     counts = {"frames": 0, "skipped": 0, "policy_s": 0.0, "age_ns": 0}
     last_id, t_start, t_report, start_sim = None, time.monotonic(), time.monotonic(), None
     while True:
@@ -139,7 +142,8 @@ def _loop(source, sink, car_id, policy, speed, lockstep, seconds, frames, lane, 
             else:
                 policy.lane = side
                 w = policy.waypoints(frame.image("rgb"), (x, y, yaw), None)
-            steering, throttle, brake = dc.controls_from_waypoints(w, speed=car_speed, max_speed=speed)
+            de.check_waypoints(w, policy, "frame %d" % frame.frame_id)
+            steering, throttle, brake = controller.controls(w, speed=car_speed, max_speed=speed)
         counts["policy_s"] += time.perf_counter() - started
         counts["age_ns"] += time.monotonic_ns() - frame.render_end_mono_ns
         sink.send_controls(car_id, steering, throttle, brake)

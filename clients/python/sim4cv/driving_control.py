@@ -97,10 +97,9 @@ def controls_from_waypoints(waypoints: Sequence[float], speed: Optional[float] =
     w = [float(x) for x in waypoints]
     if len(w) != 8:
         raise ValueError("controls_from_waypoints: expected 8 numbers v1 h1 ... v4 h4, got %d" % len(w))
-    if steer_waypoint not in (1, 2, 3, 4):
+    if not 1 <= steer_waypoint <= 4:
         raise ValueError("controls_from_waypoints: steer_waypoint must be 1 ... 4, got %r" % steer_waypoint)
-    i = 2 * (steer_waypoint - 1)
-    steering = steering_from_waypoint(w[i], w[i + 1], max_steering_deg, gain)
+    steering = steering_from_waypoint(*aim_point(w, steer_waypoint), max_steering_deg, gain)
     brake = 0.0
     if slowdown and max_speed is not None:
         max_speed = turn_speed_cap(w[7], max_speed, slowdown)
@@ -108,6 +107,19 @@ def controls_from_waypoints(waypoints: Sequence[float], speed: Optional[float] =
             brake = min(1.0, BRAKE_PER_M_S * (speed - max_speed))
     throttle = throttle_from_waypoint(w[7], t_max, t_min, k, speed, max_speed)
     return steering, throttle, brake
+
+
+def aim_point(w: Sequence[float], steer_waypoint: float) -> Tuple[float, float]:
+    """(v, h) steered at: waypoint `steer_waypoint` (1 ... 4), or between two
+    waypoints for a fraction (1.5: halfway from the 2 m to the 4 m one,
+    linearly); a whole number gives the waypoint itself, exactly."""
+    k = int(steer_waypoint) - 1
+    if k == 3:
+        return w[6], w[7]
+    f = steer_waypoint - 1 - k
+    if f == 0:
+        return w[2 * k], w[2 * k + 1]
+    return (w[2 * k] + f * (w[2 * k + 2] - w[2 * k]), w[2 * k + 1] + f * (w[2 * k + 3] - w[2 * k + 1]))
 
 
 @dataclass(frozen=True)
@@ -120,7 +132,7 @@ class Controller:
     slowdown: float = 0.0
 
     def __post_init__(self):
-        if self.steer_waypoint not in (1, 2, 3, 4):
+        if not 1 <= self.steer_waypoint <= 4:
             raise ValueError("Controller: steer_waypoint must be 1 ... 4, got %r" % self.steer_waypoint)
         if not self.gain > 0:
             raise ValueError("Controller: gain must be positive, got %r" % self.gain)
@@ -138,20 +150,34 @@ class Controller:
         return {"steer_waypoint": self.steer_waypoint, "steer_gain": self.gain, "slowdown": self.slowdown}
 
 
-def add_arguments(parser, steer_waypoint: int = 1) -> None:
-    """The Controller's command-line options (read back by from_arguments)."""
-    parser.add_argument("--steer-waypoint", type=int, default=steer_waypoint, choices=(1, 2, 3, 4),
-                        help="the waypoint the steering aims at (1: the paper's rule; default %(default)s)")
-    parser.add_argument("--steer-gain", type=float, default=1.0,
-                        help="multiplies the steering angle (1: the paper's rule)")
-    parser.add_argument("--turn-slowdown", type=float, default=0.0,
-                        help="m/s of speed cap lost per metre of |h4|, braking down to it (0: the paper's throttle)")
+def add_arguments(parser, steer_waypoint: Optional[int] = None) -> None:
+    """The Controller's command-line options (read back by from_arguments).
+    Unset ones stay None, so a model card (sim4cv.driving_card.apply) can
+    fill them; from_arguments fills what is still unset with the defaults."""
+    parser.add_argument("--steer-waypoint", type=_whole_or_fraction, default=steer_waypoint,
+                        help="the waypoint the steering aims at, 1 ... 4 (1: the paper's rule; 1.5: halfway between "
+                             "the first and the second; default: the model card's, else %s)" % (steer_waypoint or 1))
+    parser.add_argument("--steer-gain", type=float, default=None,
+                        help="multiplies the steering angle (default: the model card's, else 1, the paper's rule)")
+    parser.add_argument("--turn-slowdown", type=float, default=None,
+                        help="m/s of speed cap lost per metre of |h4|, braking down to it (default: the model "
+                             "card's, else 0: the paper's throttle)")
+
+
+def _whole_or_fraction(text: str):
+    """--steer-waypoint's value: an int when whole (reports keep 2, not 2.0)."""
+    value = float(text)
+    return int(value) if value.is_integer() else value
 
 
 def from_arguments(parser, args) -> Controller:
-    """The Controller of add_arguments' options; a bad one ends the command
-    through parser.error (exit status 2) with Controller's message."""
+    """The Controller of add_arguments' options (unset ones: Controller's
+    defaults); a bad one ends the command through parser.error (exit
+    status 2) with Controller's message."""
+    default = Controller()
     try:
-        return Controller(args.steer_waypoint, args.steer_gain, args.turn_slowdown)
+        return Controller(default.steer_waypoint if args.steer_waypoint is None else args.steer_waypoint,
+                          default.gain if args.steer_gain is None else args.steer_gain,
+                          default.slowdown if args.turn_slowdown is None else args.turn_slowdown)
     except ValueError as e:
         parser.error(str(e))

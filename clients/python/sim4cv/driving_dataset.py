@@ -61,18 +61,40 @@ class DatasetError(RuntimeError):
 _NORMALS = {"N": (0.0, 1.0), "S": (0.0, -1.0), "E": (1.0, 0.0), "W": (-1.0, 0.0)}
 
 
+MAP_HEADER = "sim4cv-map 1"
+DEFAULT_TILE_SIZE_M = 20.0        # docs/maps.md: a map without a tile_size line
+DEFAULT_SURROUNDINGS = "desert"   # docs/maps.md: a map without a surroundings line
+
+
 def parse_map(path: str) -> dict:
-    """name, surroundings, tile_size, grid (W, H), routes {name: (closed, [(col, row), ...])}
-    and objects [(kind, x, y, yaw_deg)]."""
-    info = {"name": None, "surroundings": "", "tile_size": None, "grid": None, "routes": {}, "objects": [],
-            "path": path}
-    current = None
-    with open(path) as f:
-        for raw in f:
-            words = raw.split("#", 1)[0].split() if not raw.startswith("#") else []
-            if not words:
-                continue
-            key = words[0]
+    """name, surroundings, tile_size, grid (W, H), rows (the grid's H rows),
+    routes {name: (closed, [(col, row), ...])} and objects [(kind, x, y, yaw_deg)]
+    of a map file (docs/maps.md: the one reader of every Python driving tool;
+    tile_size and surroundings default as the daemon's parser defaults them).
+    The daemon checks the rest (CheckMap); this refuses only what it cannot read."""
+    info = {"name": None, "surroundings": DEFAULT_SURROUNDINGS, "tile_size": DEFAULT_TILE_SIZE_M, "grid": None,
+            "rows": [], "routes": {}, "objects": [], "path": path}
+    current, header_seen, grid_left = None, False, 0
+    try:
+        with open(path, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except (OSError, UnicodeDecodeError) as e:
+        raise DatasetError("%s: cannot read the map: %s" % (path, e)) from None
+    for number, raw in enumerate(lines, 1):
+        if grid_left:  # a grid row: '#' is a road tile here, not a comment
+            info["rows"].append(raw.strip())
+            grid_left -= 1
+            continue
+        words = raw.split("#", 1)[0].split()
+        if not words:
+            continue
+        if not header_seen:
+            if " ".join(words) != MAP_HEADER:
+                raise DatasetError("%s line %d: expected the header '%s', found '%s'" % (path, number, MAP_HEADER, raw))
+            header_seen = True
+            continue
+        key = words[0]
+        try:
             if key == "name":
                 info["name"] = words[1]
             elif key == "surroundings":
@@ -81,6 +103,7 @@ def parse_map(path: str) -> dict:
                 info["tile_size"] = float(words[1])
             elif key == "grid":
                 info["grid"] = (int(words[1]), int(words[2]))
+                grid_left = info["grid"][1]
             elif key == "route":
                 current = words[1]
                 info["routes"][current] = (words[2] == "closed", [])
@@ -88,8 +111,12 @@ def parse_map(path: str) -> dict:
                 info["objects"].append((words[1], float(words[2]), float(words[3]), float(words[4])))
             elif key == "tiles" and current is not None:
                 info["routes"][current][1].extend(tuple(int(v) for v in w.split(",")) for w in words[1:])
-    if info["name"] is None or info["tile_size"] is None or info["grid"] is None:
-        raise DatasetError("%s: not a sim4cv map (no name, tile_size or grid line)" % path)
+        except (IndexError, ValueError):
+            raise DatasetError("%s line %d '%s': cannot read its values" % (path, number, raw.strip())) from None
+    if info["name"] is None or info["grid"] is None:
+        raise DatasetError("%s: not a sim4cv map (no name or grid line)" % path)
+    if grid_left:
+        raise DatasetError("%s: the grid ends after %d of its %d rows" % (path, len(info["rows"]), info["grid"][1]))
     return info
 
 

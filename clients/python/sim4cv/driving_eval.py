@@ -21,7 +21,7 @@ import json
 import math
 import os
 import time
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -35,6 +35,7 @@ EGO, EGO_CAMERA = "ego", "ego_cam"
 OFF_ROAD_M = 4.0          # beyond the road's right edge or into the far side of the other lane
 DEFAULT_SPEED = 8.0       # m/s, the controller's speed cap
 TIME_MARGIN_S = 30.0      # a run may take lap / (speed / 2) + this before it is stopped
+TRANSPORTS = ("tcp", "udp")
 TAKEBACK_M = 0.2          # drive_route's takeover: the policy drives again once this close to the ideal path
 
 
@@ -82,9 +83,11 @@ class NetworkPolicy:
     def __init__(self, path: str, goal: float = 0.0, lane: str = "right"):
         import cv2
         self.cv2 = cv2
-        self.goal, self.lane = float(goal), lane
+        self.goal, self.lane, self.path = float(goal), lane, path
         if not os.path.isfile(path):
             raise EvalError("model file %s does not exist" % path)
+        if os.path.getsize(path) == 0:
+            raise EvalError("model file %s is empty (0 bytes): an interrupted copy or export?" % path)
         if path.endswith(".onnx"):
             self.height, self.width, self.run, self.use_goal = _load_onnx(path)
         elif path.endswith(".pt"):
@@ -110,14 +113,20 @@ def _load_onnx(path: str):
     try:
         import onnx
         model = onnx.load(path)
-        dims = [d.dim_value for d in model.graph.input[0].type.tensor_type.shape.dim]
-        outs = [d.dim_value for d in model.graph.output[0].type.tensor_type.shape.dim]
     except Exception as e:  # noqa: BLE001 - any parse failure is a bad model file
-        raise EvalError("model file %s is not a readable ONNX model: %s" % (path, e)) from None
+        raise EvalError("model file %s is not a readable ONNX model (truncated or not ONNX): %s" % (path, e)) from None
+    if not model.graph.input or not model.graph.output:
+        raise EvalError("model file %s is not a readable ONNX model: it holds no graph inputs or outputs "
+                        "(truncated, or not ONNX)" % path)
+    dims = [d.dim_value for d in model.graph.input[0].type.tensor_type.shape.dim]
+    outs = [d.dim_value for d in model.graph.output[0].type.tensor_type.shape.dim]
     if len(dims) != 4 or dims[:2] != [1, 3] or outs != [1, 8]:
         raise EvalError("model file %s: expected input [1, 3, H, W] and output [1, 8] (v1 h1 ... v4 h4), found "
                         "input %s and output %s" % (path, dims, outs))
-    run = load_onnx_with_opencv(path)
+    try:
+        run = load_onnx_with_opencv(path)
+    except Exception as e:  # noqa: BLE001 - OpenCV's own parser may refuse what the onnx package read
+        raise EvalError("model file %s: OpenCV's DNN cannot load it: %s" % (path, e)) from None
     return dims[2], dims[3], run, any(i.name == "goal" for i in model.graph.input)
 
 
@@ -136,6 +145,17 @@ def _load_torch(path: str):
         with torch.no_grad():  # only here: turning gradients off globally would break training in this process
             return model(x, g)[0].numpy() if g is not None else model(x)[0].numpy()
     return model.height, model.width, run, model.use_goal
+
+
+def check_waypoints(waypoints: Sequence[float], policy, where: str) -> None:
+    """Stops the run (EvalError naming the model and `where`) when a policy
+    gives a waypoint that is NaN or infinite: the controller would turn it
+    into full lock, and the lap would be scored as if the model had driven."""
+    if all(math.isfinite(v) for v in waypoints):
+        return
+    who = "model %s" % policy.path if getattr(policy, "path", None) else "policy %s" % policy.name
+    raise EvalError("%s gave non-finite waypoints [%s] at %s: stopped"
+                    % (who, ", ".join("%g" % v for v in waypoints), where))
 
 
 # ---------------------------------------------------------------------------
@@ -203,12 +223,17 @@ def drive_route(client, info: dict, route: str, policy, speed: float, frame_hz: 
         started = time.perf_counter()
         w = driver.waypoints(frame.image("rgb"), (x, y, yaw), progress)
         infer_s += time.perf_counter() - started
+        check_waypoints(w, driver, "frame %d (%.2f s) of route %s on %s" % (frame.frame_id, t, route, info["name"]))
         steering, throttle, brake = controller.controls(w, speed=car_speed, max_speed=speed)
         client.send_controls(ego, steering, throttle, brake)
         rows.append([round(t, 4), round(x, 3), round(y, 3), round(math.degrees(yaw), 2), round(progress.u, 3),
                      round(deviation, 4), round(car_speed, 3), round(steering, 4), round(throttle, 4),
                      round(brake, 4), hit])
-        frame = client.step_and_receive(timeout=30.0)
+        previous_id, frame = frame.frame_id, client.step_and_receive(timeout=30.0)
+        if frame.frame_id != previous_id + 1:  # over UDP a lost frame is skipped: the lap would not be lockstep
+            raise EvalError("frame %d came after frame %d on route %s of %s: a frame was lost (%s), so this lap "
+                            "is not the lockstep lap; run it again" % (frame.frame_id, previous_id, route,
+                                                                       info["name"], client.transport))
     run = dm.score(deviations, min(progress.u, lap), collisions.count)
     run.update(completed=completed, left_road=off_road, route=route, lap_m=round(lap, 2), obstacles=len(parked),
                sim_seconds=round(rows[-1][0], 3), policy_ms=round(1000.0 * infer_s / max(len(rows), 1), 3))
@@ -245,26 +270,47 @@ ROW_COLUMNS = ["t", "x", "y", "yaw_deg", "u", "deviation_m", "speed", "steering"
 
 def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, speed: float = DEFAULT_SPEED,
              conditions: str = "", frame_hz: float = 30.0, log=print, label: str = "", obstacles: int = 0,
-             seed: int = 0, controller: dc.Controller = dc.Controller(), takeover_m: float = 0.0) -> dict:
+             seed: int = 0, controller: dc.Controller = dc.Controller(), takeover_m: float = 0.0,
+             settings_from: Optional[Dict[str, str]] = None, transport: str = "tcp") -> dict:
     """Drives every route of every map; writes out/driving.json, out/runs/*.csv
-    and the plots; returns driving.json's content. takeover_m: drive_route's."""
+    and the plots; returns driving.json's content. takeover_m: drive_route's.
+    settings_from: where each controller setting came from (flag, model card
+    or default: sim4cv.driving_card.apply), recorded in the report.
+    transport: "tcp" or "udp" (frames, Steps and Controls on one UDP socket,
+    still lockstep: the same laps, frame for frame)."""
+    if transport not in TRANSPORTS:
+        raise EvalError("transport %r: one of %s" % (transport, ", ".join(TRANSPORTS)))
+    resolved = resolve_maps(maps, surroundings)
+    infos = [parse_map(path) for path, _ in resolved]  # every map read before OUT is made: a refusal leaves none
+    made = [d for d in (out, os.path.join(out, "runs")) if not os.path.isdir(d)]
+    os.makedirs(os.path.join(out, "runs"), exist_ok=True)
+    try:
+        return _evaluate_maps(policy, resolved, infos, out, speed, conditions, frame_hz, log, label, obstacles,
+                              seed, controller, takeover_m, settings_from, transport)
+    except EvalError:
+        for d in reversed(made):  # a run stopped before its first lap was written leaves no empty folder
+            if os.path.isdir(d) and not os.listdir(d):
+                os.rmdir(d)
+        raise
+
+
+def _evaluate_maps(policy, resolved, infos, out, speed, conditions, frame_hz, log, label, obstacles, seed,
+                   controller, takeover_m, settings_from, transport) -> dict:
     import sim4cv
     from .daemon import OwnDaemon
     from . import driving_plots
 
-    resolved = resolve_maps(maps, surroundings)
-    os.makedirs(os.path.join(out, "runs"), exist_ok=True)
     report = {"settings": {"policy": policy.name, "model": getattr(policy, "path", None), "label": label,
                            "maps": [p for p, _ in resolved], "speed_m_s": speed, "conditions": conditions or "clear_noon",
                            "frame_hz": frame_hz, "off_road_m": OFF_ROAD_M,
                            "lane_departure_m": dm.LANE_DEPARTURE_M, "obstacles": obstacles, "seed": seed,
-                           "takeover_m": takeover_m, **controller.settings()},
+                           "takeover_m": takeover_m, **controller.settings(),
+                           "settings_from": settings_from or {}, "transport": transport},
               "maps": {}}
     pooled: Dict[str, List] = {"overall": [], "desert": [], "urban": []}
     trajectories = {}
     t_start = time.monotonic()
-    for path, _ in resolved:
-        info = parse_map(path)
+    for (path, _), info in zip(resolved, infos):
         name = info["name"]
         log("%s (%s)" % (name, info["surroundings"]))
         flags = ["--map", path, "--traffic-cars", "0", "--traffic-parked", "0", "--traffic-pedestrians", "0",
@@ -275,7 +321,7 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
         for route in info["routes"]:
             # a daemon per route: the ego car and its camera start from a clean world
             with OwnDaemon(flags, mode="lockstep") as daemon, \
-                    sim4cv.connect(daemon.address, name="driving_eval", timeout=30.0) as client:
+                    sim4cv.connect(_address(daemon, transport), name="driving_eval", timeout=30.0) as client:
                 for entity in client.get_world().entities:
                     if entity.name in ("car", "uav"):  # the map's own car and the UAV filming it
                         client.remove(entity.id)
@@ -308,6 +354,15 @@ def evaluate(policy, maps: Sequence[str], surroundings: Sequence[str], out: str,
         % (o.get("runs", 0), o.get("completed", 0), o.get("mean_deviation_cm"), o.get("within_25cm"),
            o.get("lane_departures", 0), o.get("collisions", 0), report["seconds"]))
     return report
+
+
+def _address(daemon, transport: str) -> str:
+    """The evaluation's one connection to its daemon: TCP, or the daemon's UDP port."""
+    if transport == "tcp":
+        return daemon.address
+    if not daemon.fields.get("udp") or daemon.fields["udp"] == "-1":
+        raise EvalError("the daemon serves no UDP port (its listening line: %s)" % daemon.fields)
+    return "udp://127.0.0.1:%s" % daemon.fields["udp"]
 
 
 def _write_rows(path: str, rows) -> None:

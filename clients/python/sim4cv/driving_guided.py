@@ -100,20 +100,8 @@ class RoadGrid:
 
     @classmethod
     def from_map(cls, path: str) -> "RoadGrid":
-        rows, tile_size, size = [], 20.0, None
-        with open(path) as f:
-            lines = [line.rstrip("\r\n") for line in f]
-        for i, line in enumerate(lines):
-            words = line.split("#", 1)[0].split()
-            if words[:1] == ["tile_size"]:
-                tile_size = float(words[1])
-            if words[:1] == ["grid"]:
-                size = (int(words[1]), int(words[2]))
-                rows = [lines[i + 1 + k].strip() for k in range(size[1])]
-                break
-        if size is None:
-            raise GuidedError("%s: no grid" % path)
-        return cls.from_rows(rows, tile_size)
+        info = dd.parse_map(path)
+        return cls.from_rows(info["rows"], info["tile_size"])
 
     def is_road(self, tile) -> bool:
         return tile in self.conn

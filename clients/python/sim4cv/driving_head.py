@@ -32,7 +32,7 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader, Dataset, WeightedRandomSampler
 
-from sim4cv.driving_train import (DrivingDataset, TrainError, _check_out, _order, _save, _write,
+from sim4cv.driving_train import (DrivingDataset, TrainError, _check_out, _order, _save, _write, load_saved,
                                   add_shared_arguments, check_run, model_from, record_weights, refusing)
 
 # what makes two head models different (a rerun with other ones is refused unless --force)
@@ -115,7 +115,7 @@ def train_head(init: str, train_dirs: List[str], val_dir: str, out: str, epochs:
     try:
         with open(init, "rb") as f:
             data = f.read()  # read once: loaded, and its digest keys the feature cache
-        stored = torch.load(io.BytesIO(data), map_location="cpu")
+        stored = load_saved(io.BytesIO(data), init)
         model, saved = model_from(stored), stored["settings"]
     except (OSError, KeyError, RuntimeError, EOFError, pickle.UnpicklingError) as e:
         raise TrainError("--init %s: not a model.pt of `train` (%s)" % (init, e))

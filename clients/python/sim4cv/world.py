@@ -193,10 +193,12 @@ class WorldRequests:
         daemon's parser accepts it; an existing file only with overwrite."""
         self.configure(pb.Configure(save_map=pb.SaveMap(name=name, text=text, overwrite=overwrite)))
 
-    def query_road(self, x, y, count=0, step=0.0, heading_deg=None):
+    def query_road(self, x, y, count=0, step=0.0, heading_deg=None, route=""):
         """Map scenes only: the nearest lane point to (x, y) (only lanes
-        within 90 degrees of heading_deg, if given) and `count` points every
-        `step` metres ahead of it, as a pb.RoadQueryResult."""
+        within 90 degrees of heading_deg, if given; only the lanes of the
+        map's route `route`, if given, its points ahead turning where it
+        turns) and `count` points every `step` metres ahead of it, as a
+        pb.RoadQueryResult."""
         query = pb.QueryRoad(point=pb.Vec3(x=x, y=y), count=count, step=step,
-                             use_heading=heading_deg is not None, heading_deg=heading_deg or 0.0)
+                             use_heading=heading_deg is not None, heading_deg=heading_deg or 0.0, route=route)
         return self.configure(pb.Configure(query_road=query)).road

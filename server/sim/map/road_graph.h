@@ -87,6 +87,17 @@ class RoadGraph {
   // the lower segment id, i.e. straight on before turning.
   LaneProjection Nearest(const Eigen::Vector2d& p, std::optional<double> heading = std::nullopt) const;
 
+  // The nearest point of the lanes `route` drives (RouteSegments' ids): a
+  // car that missed the route's turn is measured to the route's lane, not
+  // to the lane it took, and one turning through a junction to the turn's
+  // arc, never to a crossing lane. Ties go to the earlier segment of the route.
+  LaneProjection NearestOnRoute(const Eigen::Vector2d& p, std::span<const SegmentId> route) const;
+  // `count` points every `step` metres ahead of `from`, turning where `route`
+  // (RouteSegments' ids) turns; past an open route's end, or from a segment
+  // not on it, straight on where possible (as PointsAhead).
+  std::vector<LanePoint> PointsAlongRoute(const LanePoint& from, double step, int count,
+                                          std::span<const SegmentId> route) const;
+
   // The lane point `distance` >= 0 metres further along the lanes.
   LanePoint Advance(const LanePoint& from, double distance, const JunctionChooser& choose) const;
   // `count` points at step, 2*step, ... count*step metres ahead of `from`

@@ -1,6 +1,7 @@
 // Queries on the lane graph: nearest lane, points ahead, routes.
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numbers>
 
@@ -9,21 +10,24 @@
 
 namespace sim4cv::map {
 
-LaneProjection RoadGraph::Nearest(const Eigen::Vector2d& p, std::optional<double> heading) const {
-  SIM4CV_THROW_UNLESS(!segments_.empty(), "the map has no road");
-  // Every segment is searched: maps hold at most a few thousand, and the
-  // answer stays exact wherever p is (even off the grid).
+namespace {
+
+// The nearest lane point to `p` among the segments `visit` hands to its
+// callback; with `heading`, lanes running 90 degrees or more away from it
+// are skipped unless no lane is left. The lateral offset is set too.
+template <typename Visit>
+LaneProjection NearestAmong(const Eigen::Vector2d& p, std::optional<double> heading, const Visit& visit) {
   const auto search = [&](bool filter) {
     LaneProjection best;
     best.distance = std::numeric_limits<double>::infinity();
-    for (const LaneSegment& segment : segments_) {
+    visit([&](const LaneSegment& segment) {
       const LaneCurve::Nearest nearest = segment.curve.Project(p);
-      if (nearest.distance >= best.distance) continue;
+      if (nearest.distance >= best.distance) return;
       const double lane_heading = segment.curve.HeadingAt(nearest.s);
-      if (filter && std::abs(WrapAngle(lane_heading - *heading)) >= std::numbers::pi / 2) continue;
+      if (filter && std::abs(WrapAngle(lane_heading - *heading)) >= std::numbers::pi / 2) return;
       best.lane = {segment.id, nearest.s, segment.curve.PointAt(nearest.s), lane_heading};
       best.distance = nearest.distance;
-    }
+    });
     return best;
   };
   LaneProjection best = search(heading.has_value());
@@ -32,6 +36,38 @@ LaneProjection RoadGraph::Nearest(const Eigen::Vector2d& p, std::optional<double
   const Eigen::Vector2d offset = p - best.lane.position;
   best.lateral_offset = forward.x() * offset.y() - forward.y() * offset.x();
   return best;
+}
+
+}  // namespace
+
+LaneProjection RoadGraph::Nearest(const Eigen::Vector2d& p, std::optional<double> heading) const {
+  SIM4CV_THROW_UNLESS(!segments_.empty(), "the map has no road");
+  // Every segment is searched: maps hold at most a few thousand, and the
+  // answer stays exact wherever p is (even off the grid).
+  return NearestAmong(p, heading, [&](const auto& take) {
+    for (const LaneSegment& segment : segments_) take(segment);
+  });
+}
+
+LaneProjection RoadGraph::NearestOnRoute(const Eigen::Vector2d& p, std::span<const SegmentId> route) const {
+  SIM4CV_THROW_UNLESS(!route.empty(), "the route has no lane segments");
+  return NearestAmong(p, std::nullopt, [&](const auto& take) {
+    for (SegmentId id : route) take(segment(id));
+  });
+}
+
+std::vector<LanePoint> RoadGraph::PointsAlongRoute(const LanePoint& from, double step, int count,
+                                                   std::span<const SegmentId> route) const {
+  const JunctionChooser follow = [&](const LaneSegment& current, std::span<const SegmentId> options) {
+    const auto at = std::find(route.begin(), route.end(), current.id);
+    if (at != route.end()) {
+      const auto next = std::next(at) != route.end() ? *std::next(at) : route.front();  // a closed route wraps
+      const auto wanted = std::find(options.begin(), options.end(), next);
+      if (wanted != options.end()) return static_cast<std::size_t>(wanted - options.begin());
+    }
+    return ChooseTurn(options, Turn::kStraight);
+  };
+  return PointsAhead(from, step, count, follow);
 }
 
 LanePoint RoadGraph::Advance(const LanePoint& from, double distance, const JunctionChooser& choose) const {

@@ -9,6 +9,8 @@ namespace sim4cv::driving {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kMinTurnSpeed = 4.0;            // driving_control.MIN_TURN_SPEED, m/s
+constexpr double kBrakePerMetrePerSecond = 0.5;  // driving_control.BRAKE_PER_M_S
 
 // Python's min(a, b) and max(a, b): the first argument unless the second is
 // strictly smaller (larger). With a NaN these return the bound where
@@ -34,9 +36,11 @@ Controller::Controller(ControllerParams params) : params_(params) {
     throw std::invalid_argument("Controller: need 0 <= t_min <= t_max <= 1, got " + Number(params_.t_min) + ", " +
                                 Number(params_.t_max));
   }
-  if (params_.steer_waypoint < 1 || params_.steer_waypoint > 4) {
-    throw std::invalid_argument("Controller: steer_waypoint must be 1 ... 4, got " +
-                                std::to_string(params_.steer_waypoint));
+  if (!(params_.slowdown >= 0)) {
+    throw std::invalid_argument("Controller: slowdown must be >= 0, got " + Number(params_.slowdown));
+  }
+  if (!(params_.steer_waypoint >= 1 && params_.steer_waypoint <= 4)) {
+    throw std::invalid_argument("Controller: steer_waypoint must be 1 ... 4, got " + Number(params_.steer_waypoint));
   }
 }
 
@@ -53,8 +57,21 @@ double Controller::Throttle(double h4, std::optional<double> speed, std::optiona
 
 DriveControls Controller::FromWaypoints(const Waypoints& w, std::optional<double> speed,
                                         std::optional<double> max_speed) const {
-  const int i = 2 * (params_.steer_waypoint - 1);
-  return {Steering(w[i], w[i + 1]), Throttle(w[7], speed, max_speed), 0.0};
+  // driving_control.aim_point: waypoint k, or linearly between two for a fraction.
+  const int k = static_cast<int>(params_.steer_waypoint) - 1;
+  const double f = params_.steer_waypoint - 1 - k;
+  double v = w[2 * k], h = w[2 * k + 1];
+  if (k < 3 && f != 0) {
+    v += f * (static_cast<double>(w[2 * k + 2]) - v);
+    h += f * (static_cast<double>(w[2 * k + 3]) - h);
+  }
+  double brake = 0.0;
+  if (params_.slowdown != 0 && max_speed) {
+    // driving_control.turn_speed_cap, and the brake down to it
+    max_speed = PyMax(PyMin(kMinTurnSpeed, *max_speed), *max_speed - params_.slowdown * std::fabs(w[7]));
+    if (speed && *speed > *max_speed) brake = PyMin(1.0, kBrakePerMetrePerSecond * (*speed - *max_speed));
+  }
+  return {Steering(v, h), Throttle(w[7], speed, max_speed), brake};
 }
 
 }  // namespace sim4cv::driving

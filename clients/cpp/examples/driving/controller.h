@@ -8,6 +8,9 @@
 //              at waypoint k instead: vk, hk)
 //   throttle = clip(t_max - k * |h4|, t_min, t_max)   (0 when speed >= max_speed)
 //   brake    = 0
+//   slowdown S > 0 (off by default): the cap falls to
+//   max(min(4, max_speed), max_speed - S * |h4|) and the car brakes
+//   clip(0.5 * (speed - cap), 0, 1) above it (driving_control.turn_speed_cap)
 //
 // Same defaults, same clamping and the same results as the Python module,
 // NaN inputs included (the clamps are Python's min/max, see controller.cpp).
@@ -27,13 +30,14 @@ struct ControllerParams {
   double t_max = 1.0;              // throttle on a straight (h4 = 0)
   double t_min = 0.3;              // throttle floor
   double k = 0.25;                 // throttle lost per metre of |h4|
-  int steer_waypoint = 1;          // the waypoint the steering aims at, 1 (the paper) ... 4
+  double slowdown = 0;             // m/s of speed cap lost per metre of |h4| (0: off)
+  double steer_waypoint = 1;       // the waypoint the steering aims at, 1 (the paper) ... 4; 1.5: halfway between 1 and 2
 };
 
 struct DriveControls {
   double steering = 0;  // -1 (full left) ... +1 (full right)
   double throttle = 0;  // 0 ... 1
-  double brake = 0;     // always 0
+  double brake = 0;     // 0 ... 1: only when slowing for a turn
 };
 
 class Controller {

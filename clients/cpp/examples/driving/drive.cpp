@@ -15,10 +15,12 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "driving/controller.h"
+#include "driving/model_card.h"
 #include "driving/waypoint_model.h"
 #include "flags.h"
 #include "sim4cv/client.h"
@@ -30,9 +32,12 @@ using Clock = std::chrono::steady_clock;
 
 struct Options {
   std::string model, frames, controls, car, camera;
-  double max_speed = 8;  // m/s, as sim4cv.driving drive and evaluate
+  // Unset: the model card's (model.json beside the model), else the paper's rule at 8 m/s.
+  std::optional<double> max_speed;     // m/s, as sim4cv.driving drive and evaluate
+  std::optional<double> steer_waypoint;  // 1: the paper's rule; 2 is steadier with a noisy first waypoint
+  std::optional<double> steer_gain;    // 1: the paper's rule
+  std::optional<double> turn_slowdown;  // 0: the paper's throttle
   int goal = 0;
-  int steer_waypoint = 1;  // 1: the paper's rule; 2 is steadier with a noisy first waypoint
   bool left_lane = false;
   long frames_count = 0;  // 0: until Ctrl-C
   bool lockstep = false;
@@ -70,6 +75,10 @@ Options ParseArgs(int argc, char** argv) {
       o.max_speed = ParseNumber(flag, value, 0.1, 100.0);
     } else if (flag == "--steer-waypoint") {
       o.steer_waypoint = ParseNumber(flag, value, 1, 4);
+    } else if (flag == "--steer-gain") {
+      o.steer_gain = ParseNumber(flag, value, 0.01, 10.0);
+    } else if (flag == "--turn-slowdown") {
+      o.turn_slowdown = ParseNumber(flag, value, 0.0, 100.0);
     } else if (flag == "--goal") {
       if (value != "-1" && value != "0" && value != "1")
         throw UsageError("--goal wants -1, 0 or 1, got '" + value + "'");
@@ -157,11 +166,28 @@ int Run(const Options& o) {
     throw std::runtime_error("--goal " + std::to_string(o.goal) + " needs a model with a 'goal' input; " + o.model +
                              " has none");
   }
+  const std::optional<driving::ModelCard> card = driving::ReadModelCard(o.model);
+  if (card) card->CheckModel(model.height(), model.width(), model.has_goal());
+  std::string settings = "settings:";
+  // A flag, else the card, else the default; each printed with where it came from.
+  const auto choose = [&](const char* name, auto flag, auto from_card, auto fallback) {
+    const char* source = flag ? "flag" : from_card ? "model card" : "default";
+    const auto value = flag ? *flag : from_card ? *from_card : fallback;
+    std::ostringstream line;
+    line << " " << name << " " << value << " (" << source << (flag || !from_card ? std::string() : " " + card->path) << ")";
+    settings += line.str();
+    return value;
+  };
   driving::ControllerParams params;
-  params.steer_waypoint = o.steer_waypoint;
+  params.steer_waypoint = choose("steer_waypoint", o.steer_waypoint,
+                                 card ? card->steer_waypoint : std::nullopt, params.steer_waypoint);
+  params.gain = choose("steer_gain", o.steer_gain, card ? card->steer_gain : std::nullopt, params.gain);
+  params.slowdown = choose("turn_slowdown", o.turn_slowdown, card ? card->turn_slowdown : std::nullopt,
+                           params.slowdown);
+  const double max_speed = choose("speed_m_s", o.max_speed, card ? card->speed_m_s : std::nullopt, 8.0);
   const driving::Controller controller(params);
-  std::printf("model %s: %dx%d RGB%s\n", o.model.c_str(), model.width(), model.height(),
-              model.has_goal() ? ", goal input" : "");
+  std::printf("model %s: %dx%d RGB%s\n%s\n", o.model.c_str(), model.width(), model.height(),
+              model.has_goal() ? ", goal input" : "", settings.c_str());
 
   Client frames;
   frames.Connect(o.frames, "sim4cv_drive");
@@ -257,7 +283,7 @@ int Run(const Options& o) {
     // Over TCP and UDP the frame carries the state (with_state); shared
     // memory frames do not, so ask for it.
     speed = CarSpeed(frame.has_state() ? frame.state() : frames.GetState(), car.id());
-    last = controller.FromWaypoints(w, speed, o.max_speed);
+    last = controller.FromWaypoints(w, speed, max_speed);
     controls->SendControls(car.id(), static_cast<float>(last.steering), static_cast<float>(last.throttle),
                            static_cast<float>(last.brake));
     ++total, ++second_frames;
@@ -288,8 +314,10 @@ int main(int argc, char** argv) {
   } catch (const UsageError& e) {
     if (*e.what() != '\0') std::cerr << "sim4cv_drive: " << e.what() << "\n";
     std::cerr << "usage: sim4cv_drive --model FILE.onnx --frames ADDRESS [--controls ADDRESS] --car NAME_OR_ID "
-                 "--camera NAME [--add-camera] [--max-speed M/S (8)] [--goal -1|0|1] [--lane left|right] "
-                 "[--steer-waypoint 1-4] [--frames-count N] [--lockstep]\n"
+                 "--camera NAME [--add-camera] [--max-speed M/S] [--goal -1|0|1] [--lane left|right] "
+                 "[--steer-waypoint 1-4] [--steer-gain G] [--turn-slowdown S] [--frames-count N] [--lockstep]\n"
+                 "  unset --max-speed, --steer-waypoint, --steer-gain, --turn-slowdown: model.json beside the "
+                 "model, else 8, 1, 1, 0\n"
                  "  ADDRESS: tcp://HOST:PORT, udp://HOST:PORT or shm://NAME; --controls defaults to the daemon's UDP "
                  "port\n";
     return 2;
