@@ -53,7 +53,12 @@ for file in bin/sim4cvd bin/sim4cv_mapgen lib/libsim4cv-client.so lib/libsim4cv-
   [ -e "$PREFIX/$file" ] || fail "cmake --install left out $file"
 done
 
-start_daemon "$PREFIX/bin/sim4cvd" --shm-name "/sim4cv-install-$$" --shm-channels rgb
+# The installed daemon serves the installed studio, not the source tree's: a marked copy shows it.
+echo "<!-- installed copy $$ -->" >> "$PREFIX/share/sim4cv/studio/index.html"
+start_daemon "$PREFIX/bin/sim4cvd" --shm-name "/sim4cv-install-$$" --shm-channels rgb --http-port 0
+PAGE=$(/usr/bin/python3 -c 'import sys, urllib.request; print(urllib.request.urlopen(sys.argv[1], timeout=30).read().decode())' \
+       "http://127.0.0.1:$(field http)/index.html") || fail "the installed daemon's studio page"
+[[ $PAGE == *"<!-- installed copy $$ -->"* ]] || fail "the installed sim4cvd did not serve PREFIX/share/sim4cv/studio"
 step "find_package(sim4cv): a program of one's own"
 cmake -S "$SOURCE/tests/install/consumer" -B consumer -DCMAKE_PREFIX_PATH="$PREFIX" > consumer.log 2>&1 &&
   cmake --build consumer >> consumer.log 2>&1 || { cat consumer.log; fail "the find_package(sim4cv) program did not build"; }
