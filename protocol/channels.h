@@ -14,7 +14,7 @@
 #include <string>
 #include <string_view>
 
-#include "protocol/shm_layout.h"
+#include "shm_layout.h"  // relative to this file: in the source tree and installed alike
 #include "sim4cv.pb.h"
 
 namespace sim4cv::channels {

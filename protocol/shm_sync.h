@@ -18,8 +18,10 @@
 #include <ctime>
 #include <string>
 
-#include "protocol/channels.h"
-#include "protocol/shm_layout.h"
+// Relative to this file, so the headers work in the source tree and installed
+// (PREFIX/include/sim4cv/protocol/) alike.
+#include "channels.h"
+#include "shm_layout.h"
 
 namespace sim4cv::shm {
 

@@ -14,6 +14,7 @@ PACKAGES=(
   python3-matplotlib python3-yaml  # tracking evaluation plots and experiment files
   python3-torch python3-onnx  # the driving network: training on the CPU, ONNX export for OpenCV DNN
   octave liboctave-dev  # the Octave client: mkoctfile --mex, and its tests
+  python3-venv dpkg-dev  # the install test: a fresh venv for the wheel, dpkg-shlibdeps for cpack -G DEB
   clang libclang-rt-14-dev  # the fuzz build (scripts/fuzz.sh): clang and its libFuzzer/sanitizer runtimes
   chromium python3-websocket  # the studio's browser tests (tests/studio, tools/cdp_driver.py): headless Chromium over DevTools
 )

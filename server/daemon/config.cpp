@@ -108,7 +108,8 @@ Usage: sim4cvd [flags]
   --scene FILE              scene file to load (docs/scenes.md); default: the embedded default scene
   --map FILE                a tile map to load instead (docs/maps.md), e.g. scenes/tracking/easy_urban.map
   --route NAME              the map's closed route the target car drives (default: its first closed route)
-  --maps-dir DIR            where a client's LoadMap finds maps by name (default: the source tree's scenes/)
+  --maps-dir DIR            where a client's LoadMap finds maps by name (default: PREFIX/share/sim4cv/scenes
+                            beside an installed daemon, else the source tree's scenes/)
   --car-speed M/S           the target car's set speed on a map (default 6; the paper uses 4, 6 and 8)
   --traffic-cars N          kinematic traffic cars driving a map's lanes (default 0)
   --traffic-parked N        cars parked at the kerb of a map's straight roads (default 0)
@@ -149,8 +150,8 @@ Usage: sim4cvd [flags]
                             forwarding rather than 0.0.0.0: there is no authentication)
   --http-max-clients N      most HTTP connections at once, each WebSocket one (default 32); more
                             are answered 503 / TOO_MANY_CLIENTS and closed
-  --studio-dir DIR          the studio's files (default: the source tree's studio/, else the
-                            installed share/sim4cv/studio)
+  --studio-dir DIR          the studio's files (default: PREFIX/share/sim4cv/studio beside an
+                            installed daemon, else the source tree's studio/)
   --udp-port N              UDP port; 0 picks any free port, -1 turns UDP off (default 0)
   --udp-datagram-bytes N    largest datagram the daemon sends; frames are chunked to fit
                             (default 65000 for loopback; 1472 for a 1500-byte MTU network)
@@ -195,15 +196,20 @@ SIGINT or SIGTERM end it cleanly.
 )";
 }
 
-std::string DefaultMapsDir() { return SIM4CV_DEFAULT_MAPS_DIR; }
-
-std::string DefaultStudioDir() {
+// An installed daemon (cmake --install, the .deb) is PREFIX/bin/sim4cvd with its data in
+// PREFIX/share/sim4cv/NAME; one run from a build folder has none there and uses the source
+// tree it was built from. The installed copy wins, so a .deb's daemon never reads a source tree.
+static std::string DataDir(const char* name, const char* source_tree_dir) {
   std::error_code error;
-  if (std::filesystem::is_directory(SIM4CV_DEFAULT_STUDIO_DIR, error)) return SIM4CV_DEFAULT_STUDIO_DIR;
-  // An installed daemon (cmake --install): PREFIX/bin/sim4cvd, PREFIX/share/sim4cv/studio.
   const std::filesystem::path binary = std::filesystem::read_symlink("/proc/self/exe", error);
-  return error ? SIM4CV_DEFAULT_STUDIO_DIR : (binary.parent_path().parent_path() / "share/sim4cv/studio").string();
+  if (error) return source_tree_dir;
+  const std::filesystem::path installed = binary.parent_path().parent_path() / "share/sim4cv" / name;
+  return std::filesystem::is_directory(installed, error) ? installed.string() : source_tree_dir;
 }
+
+std::string DefaultMapsDir() { return DataDir("scenes", SIM4CV_DEFAULT_MAPS_DIR); }
+
+std::string DefaultStudioDir() { return DataDir("studio", SIM4CV_DEFAULT_STUDIO_DIR); }
 
 std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::string& help_text) {
   Config config;

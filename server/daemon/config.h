@@ -17,11 +17,12 @@
 
 namespace sim4cv::daemon {
 
-// The source tree's scenes/ folder, where the shipped maps are.
+// The shipped maps: PREFIX/share/sim4cv/scenes beside an installed daemon's
+// bin/, else the source tree's scenes/.
 std::string DefaultMapsDir();
 
-// The studio's files: the source tree's studio/ if it is there, else
-// share/sim4cv/studio beside the installed binary's bin/.
+// The studio's files: PREFIX/share/sim4cv/studio beside an installed daemon's
+// bin/, else the source tree's studio/.
 std::string DefaultStudioDir();
 
 struct Config {

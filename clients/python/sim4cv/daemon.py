@@ -6,17 +6,21 @@ environment) and for tests.
         client = sim4cv.connect(d.address)        # tcp://127.0.0.1:PORT
         d.fields["udp"], d.fields.get("shm")      # every field of the listening line
 
-The binary is $SIM4CVD, or build/server/daemon/sim4cvd under the repository.
+The binary is $SIM4CVD; else, in the source tree, its build/server/daemon/sim4cvd; else an
+installed one: sim4cvd on PATH, or in this Python's prefix (a venv's bin/), /usr/local or /usr.
 """
 
 import os
 import queue
+import shutil
 import subprocess
+import sys
 import threading
 import time
 from typing import Dict, List, Optional, Sequence
 
-REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
+SOURCE_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
+IN_SOURCE_TREE = os.path.isfile(os.path.join(SOURCE_ROOT, "protocol", "sim4cv.proto"))
 LISTENING_PREFIX = "sim4cvd listening "
 
 
@@ -25,11 +29,46 @@ class DaemonError(RuntimeError):
     command line and the end of its stderr)."""
 
 
+def installed_daemon() -> Optional[str]:
+    """An installed sim4cvd (the .deb, cmake --install): on PATH, or in bin/ of this Python's
+    prefix, /usr/local or /usr; None if there is none."""
+    found = shutil.which("sim4cvd")
+    if found:
+        return os.path.abspath(found)
+    for prefix in (sys.prefix, "/usr/local", "/usr"):
+        candidate = os.path.join(prefix, "bin", "sim4cvd")
+        if os.access(candidate, os.X_OK):
+            return candidate
+    return None
+
+
 def daemon_path() -> str:
-    path = os.environ.get("SIM4CVD", "build/server/daemon/sim4cvd")
+    path = os.environ.get("SIM4CVD")
+    if path is None and not IN_SOURCE_TREE:
+        path = installed_daemon()
+        if path is None:
+            raise DaemonError("sim4cvd not found on PATH nor in %s/bin, /usr/local/bin, /usr/bin: install sim4cv "
+                              "(apt install ./sim4cv_*.deb, or cmake --install) or set SIM4CVD" % sys.prefix)
+    path = path or "build/server/daemon/sim4cvd"
     if not os.path.isabs(path) and not os.path.exists(path):
-        path = os.path.join(REPO_ROOT, path)
+        path = os.path.join(SOURCE_ROOT, path)
     return os.path.abspath(path)
+
+
+def data_root() -> str:
+    """Where scenes/ and models/ are: the source tree, or an installed daemon's
+    PREFIX/share/sim4cv (the source tree's when neither has them)."""
+    if not IN_SOURCE_TREE:
+        daemon = os.environ.get("SIM4CVD") or installed_daemon()
+        if daemon:
+            share = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(daemon))), "share", "sim4cv")
+            if os.path.isdir(os.path.join(share, "scenes")):
+                return share
+    return SOURCE_ROOT
+
+
+# The folder the tools find scenes/ and models/ in (data_root(), at import).
+REPO_ROOT = data_root()
 
 
 def parse_listening_line(line: str) -> Optional[Dict[str, str]]:

@@ -162,6 +162,9 @@ MODULES = {"train": "driving_train", "relabel": "driving_relabel", "dagger": "dr
 def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     local = {"evaluate": evaluate_main, "drive": drive_main, "human": human_main, "generate": generate_main}
+    if argv in (["-h"], ["--help"]):
+        print(__doc__)
+        return 0
     if not argv or argv[0] not in set(MODULES) | set(local):
         print(__doc__, file=sys.stderr)
         return 2

@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+// Installed, protocol/ sits beside this file (PREFIX/include/sim4cv/protocol/) and
+// sim4cv.pb.h in PREFIX/include; in the source tree both come from the include path.
 #include "protocol/framing.h"
 #include "sim4cv.pb.h"
 

@@ -1,0 +1,13 @@
+# CPack pre-build script (deb.cmake): the staging install's usr/etc becomes /etc in the package.
+file(GLOB_RECURSE staged_etc LIST_DIRECTORIES false "${CPACK_TEMPORARY_INSTALL_DIRECTORY}/*/etc/default/sim4cvd")
+foreach(file IN LISTS staged_etc)
+  string(REGEX REPLACE "/usr/etc/default/sim4cvd$" "/etc/default/sim4cvd" target "${file}")
+  get_filename_component(target_dir "${target}" DIRECTORY)
+  file(MAKE_DIRECTORY "${target_dir}")
+  file(RENAME "${file}" "${target}")
+  string(REGEX REPLACE "/default/sim4cvd$" "" emptied "${file}")
+  file(REMOVE_RECURSE "${emptied}")
+endforeach()
+if(NOT staged_etc)
+  message(FATAL_ERROR "deb_move_etc: no etc/default/sim4cvd under ${CPACK_TEMPORARY_INSTALL_DIRECTORY}")
+endif()
