@@ -19,6 +19,7 @@ sim4cv_test(integration configure_map_test sim4cv_client)
 sim4cv_test(integration map_files_test sim4cv_client)
 target_compile_definitions(map_files_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOURCE_DIR}")  # a shipped map
 sim4cv_test(integration run_log_requests_test sim4cv_client sim4cv_runlog)
+sim4cv_test(integration named_files_race_test sim4cv_client sim4cv_runlog)
 sim4cv_test(integration hardening_session_test sim4cv_client)
 sim4cv_test(integration hardening_tcp_test sim4cv_client)
 sim4cv_test(integration hardening_tcp_timeouts_test sim4cv_client)
