@@ -21,7 +21,9 @@ proto::Welcome MakeWelcome(proto::SimMode mode) {
 
 ProtocolHarness::ProtocolHarness(proto::SimMode mode)
     : context_{scene_,   mode, MakeWelcome(mode), world_, commands_, latest_state_, limits::kDefaultMaxMessageBytes,
-               counters_} {
+               counters_,
+               "",
+               ""} {
   // What the sim thread publishes for the default scene: its entities and cameras.
   proto::WorldInfo world;
   world.set_scene_name("default");

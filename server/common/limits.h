@@ -198,6 +198,14 @@ inline constexpr int64_t kFramePoolTrimPeriodMs = 1000;
 // holding a huge tree cannot make one answer huge; the shipped maps are 44.
 inline constexpr std::size_t kMaxListedMaps = 1000;
 
+// A map's or run log's name (OpenMap, SaveMap, StartLog): each '/'-separated
+// part at most this long, so the file's name with ".map" or ".s4log", and
+// SaveMap's temporary ".NAME.map.tmpPID" beside it, stay within the file
+// system's 255 bytes; a longer part is refused before any folder is made.
+inline constexpr std::size_t kMaxFileNamePartBytes = 200;
+// ListMaps: how deep below --maps-dir the walk goes.
+inline constexpr int kMaxListedMapDepth = 8;
+
 // Subscribe.max_fps: the highest frame rate cap a subscriber may ask for
 // (above it, ask for 0: every frame).
 inline constexpr double kMaxSubscribeFps = 1000.0;

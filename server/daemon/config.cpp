@@ -92,6 +92,11 @@ std::string EffectsHelp() {
   return text;
 }
 
+// A loopback address: only this machine's processes reach it.
+bool IsLoopback(const std::string& address) {
+  return address.rfind("127.", 0) == 0 || address == "::1" || address == "localhost";
+}
+
 }  // namespace
 
 uint32_t Config::substeps_per_frame() const {
@@ -123,6 +128,11 @@ Usage: sim4cvd [flags]
   --seed N                  seed for every random choice of the simulation (default 1)
   --bind ADDRESS            address the TCP port listens on (default 127.0.0.1; 0.0.0.0 for all)
   --tcp-port N              TCP port; 0 picks any free port (default 0)
+  --token-file FILE         the access token clients must show in Hello (docs/security.md); default:
+                            a fresh random one. Either way it is written, readable only by this user,
+                            to $XDG_RUNTIME_DIR/sim4cv/tcp-PORT.token (or ~/.cache/sim4cv/), where
+                            this user's clients find it
+  --no-auth                 admit clients without the token; only with loopback --bind and --http-bind
   --physics-hz N            physics steps per simulated second (default 240)
   --frame-hz N              frames per simulated second; physics-hz must be a multiple (default 30)
   --width N, --height N     camera resolution in pixels (default 320 x 180)
@@ -220,6 +230,7 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--map", [&](auto&, auto& v) { config.map_file = v; }},
       {"--route", [&](auto&, auto& v) { config.route = v; }},
       {"--maps-dir", [&](auto&, auto& v) { config.maps_dir = v; }},
+      {"--token-file", [&](auto&, auto& v) { config.token_file = v; }},
       {"--traffic-cars", [&](auto& f, auto& v) { config.traffic.moving_cars = ParseNumber<int>(f, v, 0, 500); }},
       {"--traffic-parked", [&](auto& f, auto& v) { config.traffic.parked_cars = ParseNumber<int>(f, v, 0, 2000); }},
       {"--traffic-pedestrians",
@@ -329,6 +340,10 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       help_text = HelpText();
       return std::nullopt;
     }
+    if (args[i] == "--no-auth") {  // the one flag without a value
+      config.no_auth = true;
+      continue;
+    }
     const auto setter = setters.find(args[i]);
     SIM4CV_THROW_UNLESS(setter != setters.end(), "unknown flag '" << args[i] << "'; see sim4cvd --help");
     SIM4CV_THROW_UNLESS(i + 1 < args.size(), args[i] << " needs a value; see sim4cvd --help");
@@ -349,6 +364,13 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
   SIM4CV_THROW_UNLESS(
       config.log_file.empty() || config.log_file != config.replay_file,
       "--log and --replay both name '" << config.log_file << "'; recording would erase the replayed log");
+  SIM4CV_THROW_UNLESS(!config.no_auth || (IsLoopback(config.bind_address) &&
+                                          (config.http_port < 0 || IsLoopback(config.http_bind))),
+                      "--no-auth admits anyone who reaches the ports, so only with a loopback --bind and --http-bind "
+                      "(127.0.0.1 or ::1); --bind is '"
+                          << config.bind_address << "', --http-bind '" << config.http_bind
+                          << "'. Give clients the token instead (docs/security.md)");
+  SIM4CV_THROW_UNLESS(!config.no_auth || config.token_file.empty(), "--no-auth and --token-file both given; pick one");
   const double ratio = config.physics_hz / config.frame_hz;
   SIM4CV_THROW_UNLESS(
       std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1,

@@ -48,6 +48,11 @@ struct Config {
   uint64_t seed = 1;
   std::string bind_address = "127.0.0.1";
   uint16_t tcp_port = 0;
+  // Access control (docs/security.md): Hello must carry the daemon's token,
+  // generated at start or read from token_file; no_auth (loopback binds
+  // only) turns it off.
+  std::string token_file;
+  bool no_auth = false;
   double physics_hz = 240.0;
   double frame_hz = 30.0;
   uint32_t width = 320;

@@ -9,6 +9,7 @@
 #include "protocol/framing.h"
 #include "server/common/check.h"
 #include "server/common/diagnostics.h"
+#include "server/daemon/access_token_files.h"
 #include "server/daemon/sim_thread.h"
 #include "server/daemon/state_message.h"
 #include "server/transport/http/http_transport.h"
@@ -37,6 +38,33 @@ proto::Welcome MakeWelcome(const Config& config, const std::vector<std::unique_p
   welcome.set_physics_hz(config.physics_hz);
   welcome.set_frame_hz(config.frame_hz);
   return welcome;
+}
+
+// The token file names of the endpoints (AccessTokenFiles): "tcp-5000",
+// "udp-5001", "http-8080", "shm-NAME"; clients look a file up by the
+// address they were given.
+std::vector<std::string> TokenFileNames(const std::vector<std::unique_ptr<transport::Transport>>& transports) {
+  std::vector<std::string> names;
+  for (const auto& t : transports) {
+    const proto::TransportInfo info = t->info();
+    std::string address = info.address();
+    if (!address.empty() && address.front() == '/') address.erase(0, 1);  // shm names may start with '/'
+    switch (info.kind()) {
+      case proto::TRANSPORT_KIND_TCP:
+        names.push_back("tcp-" + address);
+        break;
+      case proto::TRANSPORT_KIND_UDP:
+        names.push_back("udp-" + address);
+        break;
+      case proto::TRANSPORT_KIND_WEBSOCKET:
+        names.push_back("http-" + address);
+        break;
+      default:
+        if (address.find('/') == std::string::npos) names.push_back("shm-" + address);
+        break;
+    }
+  }
+  return names;
 }
 
 }  // namespace
@@ -100,8 +128,31 @@ int RunDaemon(const Config& config) {
   session::LatestState latest_state;
   session::Counters counters;
   session::WorldDirectory directory;
-  const session::ServerContext context{scene,    config.mode,  MakeWelcome(config, transports), directory,
-                                       commands, latest_state, config.max_message_bytes,        counters};
+  // Before any transport starts: a client that reads the listening line finds the token's file.
+  const std::string token = LoadOrMakeToken(config);
+  std::unique_ptr<AccessTokenFiles> token_files;
+  if (!token.empty()) {
+    token_files = std::make_unique<AccessTokenFiles>(token, TokenFileNames(transports));
+    LOG_INFO("clients must show the access token in " << token_files->paths().front()
+                                                      << " (readable only by this user; docs/security.md)");
+    if (config.http_port >= 0) {
+      LOG_INFO("studio: open http://" << config.http_bind << ":" << transports.back()->info().address()
+                                      << "/?token=$(cat " << TokenFolder() << "/http-"
+                                      << transports.back()->info().address() << ".token)");
+    }
+  } else {
+    LOG_WARNING("--no-auth: every local user can drive this daemon and make it write files");
+  }
+  const session::ServerContext context{scene,
+                                       config.mode,
+                                       MakeWelcome(config, transports),
+                                       directory,
+                                       commands,
+                                       latest_state,
+                                       config.max_message_bytes,
+                                       counters,
+                                       token,
+                                       token_files ? token_files->paths().front() : std::string()};
   SimThread sim(config, initial_scene, commands, latest_state, directory, counters);
   sim.Start();
   for (auto& t : transports) t->Start(context);

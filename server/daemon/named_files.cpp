@@ -1,15 +1,15 @@
 #include "server/daemon/named_files.h"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <system_error>
+#include <utility>
 #include <vector>
 
 #include "server/common/limits.h"
@@ -17,65 +17,82 @@
 #include "server/daemon/configure_error.h"
 
 namespace sim4cv::daemon {
-namespace fs = std::filesystem;
 namespace {
 
 [[noreturn]] void Fail(proto::ErrorCode code, const std::string& message) { throw ConfigureError(code, message); }
 
 std::string SystemReason(int error) { return std::strerror(error); }
 
-// The folder named paths live under; it must exist (a daemon started with a
-// --maps-dir that does not is told so, not given a new folder).
-fs::path Root(const std::string& dir, const char* what, const char* flag) {
-  std::error_code error;
-  if (!fs::is_directory(dir, error)) {
-    Fail(proto::ERROR_CODE_IO, std::string("the ") + what + " " + Quoted(dir) + " (sim4cvd " + flag +
-                                   ") is not a folder; start sim4cvd with " + flag + " naming one");
-  }
-  return fs::path(dir);
-}
-
-// Walks `name`'s folders under `root`, refusing a symbolic link or a file
-// where a folder belongs (creating missing folders when `create`); returns
-// the map file's path.
-fs::path Confined(const fs::path& root, const std::string& name, const char* extension, bool create) {
-  fs::path at = root;
-  const fs::path relative(name + extension);
-  for (auto part = relative.begin(); part != relative.end(); ++part) {
-    at /= *part;
-    const bool last = std::next(part) == relative.end();
-    std::error_code error;
-    const fs::file_status status = fs::symlink_status(at, error);
-    if (fs::is_symlink(status)) {
-      Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(at.string()) +
-                                                   " is a symbolic link; the studio reads and writes only real files "
-                                                   "and folders under --maps-dir");
-    }
-    if (last) break;
-    if (!fs::exists(status)) {
-      if (!create) break;  // the file cannot exist either; the caller says so
-      if (!fs::create_directory(at, error) && error) {
-        Fail(proto::ERROR_CODE_IO, "cannot create the folder " + Quoted(at.string()) + ": " + error.message());
-      }
-    } else if (!fs::is_directory(status)) {
-      Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(at.string()) + " is a file, not a folder: choose another name");
+// One of the folders named paths live under: its flag's value and its
+// descriptor. The folder must exist (a daemon started with a --maps-dir
+// that does not is told so, not given a new folder); the operator's path
+// itself may pass through links.
+struct Root {
+  Root(const std::string& dir_, const char* what, const char* flag_, std::string field_)
+      : dir(dir_), flag(flag_), field(std::move(field_)) {
+    fd = Fd(::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+    if (!fd.valid()) {
+      Fail(proto::ERROR_CODE_IO, std::string("the ") + what + " " + Quoted(dir) + " (sim4cvd " + flag +
+                                     ") is not a folder; start sim4cvd with " + flag + " naming one");
     }
   }
-  return root / relative;
+  std::string Shown(const std::string& relative) const { return dir + (dir.back() == '/' ? "" : "/") + relative; }
+
+  std::string dir;
+  const char* flag;
+  std::string field;  // the request's field, e.g. "OpenMap.name 'x'", that Errors start with
+  Fd fd;
+};
+
+// The Error for an open beneath `root` that failed with `error`; ENOENT is
+// the caller's to word.
+[[noreturn]] void FailOpen(const Root& root, const std::string& relative, int error) {
+  const std::string shown = root.field + ": " + Quoted(root.Shown(relative));
+  if (error == ELOOP || error == EXDEV) {
+    Fail(proto::ERROR_CODE_INVALID_ARGUMENT, shown + " is a symbolic link or passes through one; sim4cvd reads and "
+                                                 "writes only real files and folders under " +
+                                                 root.flag);
+  }
+  if (error == ENOTDIR) {
+    Fail(proto::ERROR_CODE_INVALID_ARGUMENT, shown + ": a part of it is a file, not a folder: choose another name");
+  }
+  if (error == EINVAL) {
+    Fail(proto::ERROR_CODE_INVALID_ARGUMENT, shown + " is not a name beneath " + root.flag +
+                                                 ": give '/'-separated parts, none empty, '.' or '..'");
+  }
+  if (error == ENAMETOOLONG) {
+    Fail(proto::ERROR_CODE_INVALID_ARGUMENT, shown + ": a part of the name is too long; give at most " +
+                                                 std::to_string(limits::kMaxFileNamePartBytes) + " bytes a part");
+  }
+  Fail(proto::ERROR_CODE_IO, "cannot open " + shown + ": " + SystemReason(error));
 }
 
-// A file about to be written: an existing one only with `overwrite`, and
-// only a regular file.
-void RefuseExisting(const fs::path& path, bool overwrite, const char* request) {
-  std::error_code error;
-  if (!fs::exists(path, error)) return;
+// The folder of `relative` (created when `create`), refused as FailOpen says.
+Fd FolderOf(const Root& root, const std::string& relative, bool create) {
+  const std::string folder = SplitLeaf(relative).first;
+  Fd fd(OpenFolderBeneath(root.fd.get(), folder, create));
+  if (!fd.valid()) FailOpen(root, folder, errno);
+  return fd;
+}
+
+// A file about to be written in `folder`: an existing one only with
+// `overwrite`, and only a regular file. Returns whether it exists.
+bool RefuseExisting(int folder, const std::string& leaf, const std::string& shown, bool overwrite,
+                    const char* request, const char* flag) {
+  struct stat info {};
+  if (::fstatat(folder, leaf.c_str(), &info, AT_SYMLINK_NOFOLLOW) != 0) return false;
+  if (S_ISLNK(info.st_mode)) {
+    Fail(proto::ERROR_CODE_INVALID_ARGUMENT,
+         Quoted(shown) + " is a symbolic link; sim4cvd reads and writes only real files and folders under " + flag);
+  }
   if (!overwrite) {
-    Fail(proto::ERROR_CODE_ALREADY_EXISTS, std::string(request) + ": " + Quoted(path.string()) +
-                                               " exists; set overwrite to replace it, or choose another name");
+    Fail(proto::ERROR_CODE_ALREADY_EXISTS,
+         std::string(request) + ": " + Quoted(shown) + " exists; set overwrite to replace it, or choose another name");
   }
-  if (!fs::is_regular_file(path, error)) {
-    Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(path.string()) + " is not a regular file: choose another name");
+  if (!S_ISREG(info.st_mode)) {
+    Fail(proto::ERROR_CODE_INVALID_ARGUMENT, Quoted(shown) + " is not a regular file: choose another name");
   }
+  return true;
 }
 
 // write(2) until done; false with errno set on a failure.
@@ -89,88 +106,154 @@ bool WriteAll(int fd, const std::string& text) {
   return true;
 }
 
+// ListMapNames' walk: from the folder's descriptor, every part opened with
+// O_NOFOLLOW, so a link swapped in is skipped, not entered.
+class MapWalk {
+ public:
+  void Walk(int folder, const std::string& prefix, int depth) {
+    const int listed = ::openat(folder, ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (listed < 0) return;
+    DIR* dir = ::fdopendir(listed);
+    if (dir == nullptr) {
+      ::close(listed);
+      return;
+    }
+    // The walk is bounded too: a --maps-dir pointed at a huge tree costs at
+    // most this many entries.
+    constexpr std::size_t kMaxEntriesWalked = 20 * limits::kMaxListedMaps;
+    while (const dirent* entry = ::readdir(dir)) {
+      if (++walked_ > kMaxEntriesWalked) break;
+      const std::string name = entry->d_name;
+      if (name.empty() || name.front() == '.') continue;  // ".", ".." and hidden files no request can name
+      struct stat info {};
+      if (::fstatat(::dirfd(dir), name.c_str(), &info, AT_SYMLINK_NOFOLLOW) != 0) continue;
+      if (S_ISDIR(info.st_mode) && depth < limits::kMaxListedMapDepth) {
+        Fd sub(::openat(::dirfd(dir), name.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC));
+        if (sub.valid()) Walk(sub.get(), prefix + name + "/", depth + 1);
+      } else if (S_ISREG(info.st_mode) && name.size() > 4 && name.compare(name.size() - 4, 4, ".map") == 0) {
+        found_.push_back(prefix + name.substr(0, name.size() - 4));
+      }
+    }
+    ::closedir(dir);
+  }
+  std::vector<std::string>& found() { return found_; }
+
+ private:
+  std::size_t walked_ = 0;
+  std::vector<std::string> found_;
+};
+
 }  // namespace
 
 void ListMapNames(const std::string& maps_dir, google::protobuf::RepeatedPtrField<std::string>& names) {
-  // The walk is bounded too: a --maps-dir pointed at a huge tree costs the
-  // sim thread (every client's frames wait) at most this many entries.
-  constexpr std::size_t kMaxEntriesWalked = 20 * limits::kMaxListedMaps;
-  std::vector<std::string> found;
-  std::error_code error;
-  const fs::path root(maps_dir);
-  fs::recursive_directory_iterator it(root, fs::directory_options::skip_permission_denied, error);
-  std::size_t walked = 0;
-  for (; !error && it != fs::recursive_directory_iterator() && walked < kMaxEntriesWalked; it.increment(error)) {
-    ++walked;
-    const fs::directory_entry& entry = *it;
-    std::error_code status_error;
-    if (entry.path().extension() != ".map" || !entry.is_regular_file(status_error) || entry.is_symlink(status_error)) {
-      continue;
-    }
-    fs::path relative = entry.path().lexically_relative(root);
-    relative.replace_extension();
-    found.push_back(relative.generic_string());
-  }
+  const Fd root(::open(maps_dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (!root.valid()) return;
+  MapWalk walk;
+  walk.Walk(root.get(), "", 0);
+  std::vector<std::string>& found = walk.found();
   std::sort(found.begin(), found.end());
   if (found.size() > limits::kMaxListedMaps) found.resize(limits::kMaxListedMaps);
   for (std::string& name : found) names.Add(std::move(name));
 }
 
-std::string ReadMapFile(const std::string& maps_dir, const std::string& name) {
-  const fs::path path = Confined(Root(maps_dir, "maps folder", "--maps-dir"), name, ".map", false);
-  std::error_code error;
-  if (!fs::is_regular_file(path, error)) {
+std::string ReadMapFile(const std::string& maps_dir, const std::string& name, const char* field) {
+  const Root root(maps_dir, "maps folder", "--maps-dir", std::string(field) + " " + Quoted(name));
+  const std::string relative = name + ".map";
+  // O_NONBLOCK: a FIFO put there must not block the thread.
+  const Fd fd(OpenBeneath(root.fd.get(), relative, O_RDONLY | O_NONBLOCK));
+  if (!fd.valid()) {
+    if (errno == ENOENT) {
+      Fail(proto::ERROR_CODE_INVALID_ARGUMENT, std::string(field) + " " + Quoted(name) + ": no such map (looked for " +
+                                                   root.Shown(relative) + "); ListMaps names them");
+    }
+    FailOpen(root, relative, errno);
+  }
+  struct stat info {};
+  if (::fstat(fd.get(), &info) != 0 || !S_ISREG(info.st_mode)) {
     Fail(proto::ERROR_CODE_INVALID_ARGUMENT,
-         "OpenMap.name " + Quoted(name) + ": no such map (looked for " + path.string() + "); ListMaps names them");
+         std::string(field) + " " + Quoted(name) + ": " + Quoted(root.Shown(relative)) + " is not a regular file");
   }
-  const auto size = fs::file_size(path, error);
-  if (error || size > limits::kMaxMapTextBytes) {
-    Fail(proto::ERROR_CODE_IO,
-         Quoted(path.string()) + (error ? ": " + error.message()
-                                        : " is " + std::to_string(size) + " bytes; a map has at most " +
-                                              std::to_string(limits::kMaxMapTextBytes)));
+  if (static_cast<std::size_t>(info.st_size) > limits::kMaxMapTextBytes) {
+    Fail(proto::ERROR_CODE_IO, Quoted(root.Shown(relative)) + " is " + std::to_string(info.st_size) +
+                                   " bytes; a map has at most " + std::to_string(limits::kMaxMapTextBytes));
   }
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in) Fail(proto::ERROR_CODE_IO, "cannot read " + Quoted(path.string()) + ": " + SystemReason(errno));
-  return text.str();
+  std::string text;
+  char buffer[65536];
+  for (;;) {
+    const ssize_t n = ::read(fd.get(), buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) Fail(proto::ERROR_CODE_IO, "cannot read " + Quoted(root.Shown(relative)) + ": " + SystemReason(errno));
+    if (n == 0) return text;
+    text.append(buffer, static_cast<std::size_t>(n));
+    if (text.size() > limits::kMaxMapTextBytes) {
+      Fail(proto::ERROR_CODE_IO, Quoted(root.Shown(relative)) + " grew past " +
+                                     std::to_string(limits::kMaxMapTextBytes) + " bytes while read");
+    }
+  }
 }
 
 void WriteMapFile(const std::string& maps_dir, const std::string& name, const std::string& text, bool overwrite) {
-  const fs::path path = Confined(Root(maps_dir, "maps folder", "--maps-dir"), name, ".map", true);
-  RefuseExisting(path, overwrite, "SaveMap");
-  std::error_code error;
+  const Root root(maps_dir, "maps folder", "--maps-dir", "SaveMap.name " + Quoted(name));
+  const std::string relative = name + ".map";
+  const Fd folder = FolderOf(root, relative, true);
+  const std::string leaf = SplitLeaf(relative).second;
+  const std::string shown = root.Shown(relative);
+  RefuseExisting(folder.get(), leaf, shown, overwrite, "SaveMap", root.flag);
   // Beside the target, so the rename stays on one file system; the pid keeps
   // two daemons sharing a folder apart, O_EXCL a stale leftover.
-  std::string hidden = path.filename().string();  // built step by step: GCC 12 warns (-Wrestrict) on "." + ...
+  std::string hidden = leaf;  // built step by step: GCC 12 warns (-Wrestrict) on "." + ...
   hidden.insert(0, 1, '.');
   hidden += ".tmp";
   hidden += std::to_string(::getpid());
-  const fs::path temporary = path.parent_path() / hidden;
-  fs::remove(temporary, error);
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) Fail(proto::ERROR_CODE_IO, "cannot write " + Quoted(temporary.string()) + ": " + SystemReason(errno));
+  ::unlinkat(folder.get(), hidden.c_str(), 0);
+  const int fd = ::openat(folder.get(), hidden.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) FailOpen(root, relative, errno);
   const bool written = WriteAll(fd, text) && ::fsync(fd) == 0;
   const int write_error = errno;
   ::close(fd);
-  if (!written || ::rename(temporary.c_str(), path.c_str()) != 0) {
+  // The rename replaces a link at the leaf rather than following it; without
+  // overwrite it never replaces anything (a file made since the check is kept).
+  const bool renamed =
+      written && ::renameat2(folder.get(), hidden.c_str(), folder.get(), leaf.c_str(), overwrite ? 0 : RENAME_NOREPLACE) == 0;
+  if (!renamed) {
     const int reason = written ? errno : write_error;
-    fs::remove(temporary, error);
+    ::unlinkat(folder.get(), hidden.c_str(), 0);
+    if (reason == EEXIST) RefuseExisting(folder.get(), leaf, shown, false, "SaveMap", root.flag);
     Fail(proto::ERROR_CODE_IO,
-         "cannot write " + Quoted(path.string()) + ": " + SystemReason(reason) + "; the file on disk is unchanged");
+         "cannot write " + Quoted(shown) + ": " + SystemReason(reason) + "; the file on disk is unchanged");
   }
 }
 
-std::string NewLogPath(const std::string& logs_dir, const std::string& name, bool overwrite) {
+void NewLogFile::Discard() {
+  fd = Fd();
+  if (folder.valid()) ::unlinkat(folder.get(), leaf.c_str(), 0);
+}
+
+NewLogFile CreateLogFile(const std::string& logs_dir, const std::string& name, bool overwrite) {
   if (logs_dir.empty()) {
     Fail(proto::ERROR_CODE_INVALID_STATE,
          "StartLog: sim4cvd was started without --logs-dir, so clients cannot write run logs; start it with "
          "--logs-dir DIR (or record the whole run with --log FILE)");
   }
-  const fs::path path = Confined(Root(logs_dir, "logs folder", "--logs-dir"), name, ".s4log", true);
-  RefuseExisting(path, overwrite, "StartLog");
-  return path.string();
+  const Root root(logs_dir, "logs folder", "--logs-dir", "StartLog.name " + Quoted(name));
+  const std::string relative = name + ".s4log";
+  NewLogFile log;
+  log.folder = FolderOf(root, relative, true);
+  log.leaf = SplitLeaf(relative).second;
+  log.path = root.Shown(relative);
+  // Replaced by a new file, never truncated: a hard link there to a file
+  // elsewhere keeps its content.
+  if (RefuseExisting(log.folder.get(), log.leaf, log.path, overwrite, "StartLog", root.flag)) {
+    ::unlinkat(log.folder.get(), log.leaf.c_str(), 0);
+  }
+  log.fd = Fd(::openat(log.folder.get(), log.leaf.c_str(),
+                       O_WRONLY | O_CREAT | O_EXCL | O_APPEND | O_NOFOLLOW | O_CLOEXEC, 0644));
+  if (!log.fd.valid()) {
+    const int error = errno;
+    if (error == EEXIST) RefuseExisting(log.folder.get(), log.leaf, log.path, false, "StartLog", root.flag);
+    FailOpen(root, relative, error);
+  }
+  return log;
 }
 
 }  // namespace sim4cv::daemon

@@ -1,14 +1,17 @@
 // The files clients reach by name: maps under --maps-dir (LoadMap.name,
 // ListMaps, the studio's OpenMap / SaveMap) and run logs under --logs-dir
 // (StartLog). Every path is confined to its folder: a name is checked part
-// by part on the network thread (configure_check), and here no symbolic link
-// is followed out of it. Runs on the sim thread, between frames, like
-// LoadMap's own file.
+// by part on the network thread (configure_check), and here every file is
+// opened from the folder's descriptor with no symbolic link followed in any
+// part at the moment of opening (server/common/beneath.h), so a link
+// swapped in after a check is never followed.
 #pragma once
 
 #include <google/protobuf/repeated_ptr_field.h>
 
 #include <string>
+
+#include "server/common/beneath.h"
 
 namespace sim4cv::daemon {
 
@@ -18,10 +21,12 @@ namespace sim4cv::daemon {
 // A missing or unreadable folder lists nothing.
 void ListMapNames(const std::string& maps_dir, google::protobuf::RepeatedPtrField<std::string>& names);
 
-// The bytes of "<maps_dir>/<name>.map". Throws ConfigureError: INVALID_ARGUMENT
-// for a missing map or a symbolic link on the way, IO when it cannot be read
-// or is larger than limits::kMaxMapTextBytes.
-std::string ReadMapFile(const std::string& maps_dir, const std::string& name);
+// The bytes of "<maps_dir>/<name>.map". Throws ConfigureError naming
+// `field` ("OpenMap.name", "LoadMap.name"): INVALID_ARGUMENT for a missing
+// map, a symbolic link on the way or a file that is not regular, IO when it
+// cannot be read or is larger than limits::kMaxMapTextBytes. Never quotes
+// the file's content.
+std::string ReadMapFile(const std::string& maps_dir, const std::string& name, const char* field);
 
 // Writes `text` to "<maps_dir>/<name>.map" (missing folders created): to a
 // temporary file beside it, flushed, then renamed over it, so a reader or a
@@ -31,11 +36,21 @@ std::string ReadMapFile(const std::string& maps_dir, const std::string& name);
 // the system refuses (the message names the path and the reason).
 void WriteMapFile(const std::string& maps_dir, const std::string& name, const std::string& text, bool overwrite);
 
-// The path of a new run log "<logs_dir>/<name>.s4log" (missing folders
-// created), for runlog::RunLogWriter to create. Throws ConfigureError:
-// INVALID_STATE without --logs-dir, ALREADY_EXISTS when the file exists and
-// !overwrite, INVALID_ARGUMENT for a symbolic link or a non-folder on the
-// way, IO when a folder cannot be made.
-std::string NewLogPath(const std::string& logs_dir, const std::string& name, bool overwrite);
+// A run log just created beneath --logs-dir, open for writing.
+struct NewLogFile {
+  Fd fd;
+  std::string path;  // for messages and WorldInfo.log_file
+  Fd folder;         // the log's folder, to remove it by name (Discard)
+  std::string leaf;  // "NAME.s4log"
+  // Removes the file (a StartLog that failed after creating it).
+  void Discard();
+};
+
+// Creates "<logs_dir>/<name>.s4log" (missing folders created); with
+// `overwrite` an existing log is removed first (never truncated through a
+// link). Throws ConfigureError: INVALID_STATE without --logs-dir,
+// ALREADY_EXISTS when the file exists and !overwrite, INVALID_ARGUMENT for
+// a symbolic link or a non-folder on the way, IO when the system refuses.
+NewLogFile CreateLogFile(const std::string& logs_dir, const std::string& name, bool overwrite);
 
 }  // namespace sim4cv::daemon

@@ -66,6 +66,13 @@ RunLogger::RunLogger(const Config& config, const sim::Scene& scene, const sim::S
       traffic_ids_(sim::TrafficIdsOf(scene)),
       writer_(std::make_unique<runlog::RunLogWriter>(config.log_file, MakeHeader(config, scene, initial))) {}
 
+RunLogger::RunLogger(Fd log_fd, const Config& config, const sim::Scene& scene, const sim::State& initial,
+                     session::Counters& counters)
+    : counters_(counters),
+      traffic_ids_(sim::TrafficIdsOf(scene)),
+      writer_(std::make_unique<runlog::RunLogWriter>(log_fd.release(), config.log_file,
+                                                     MakeHeader(config, scene, initial))) {}
+
 void RunLogger::OfferFrame(const session::FrameRef& frame) {
   for (const render::GroundTruthBox& box : frame->boxes) {
     if (box.instance != sim::kCarEntityId) continue;

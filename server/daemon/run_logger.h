@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "server/common/beneath.h"
 #include "server/daemon/config.h"
 #include "server/session/client_link.h"
 #include "server/session/counters.h"
@@ -29,6 +30,10 @@ class RunLogger final : public session::ClientLink {
   // Creates (truncates) config.log_file and writes the header. Throws naming
   // the file if it cannot: that refuses the start, before any frame.
   RunLogger(const Config& config, const sim::Scene& scene, const sim::State& initial, session::Counters& counters);
+  // The same on a file already created and opened (StartLog's, beneath
+  // --logs-dir); config.log_file names it in messages.
+  RunLogger(Fd log_fd, const Config& config, const sim::Scene& scene, const sim::State& initial,
+            session::Counters& counters);
 
   // The ground-truth box of the target (the car) in one rendered camera
   // frame of the current simulation frame, if the car is visible in it.

@@ -19,14 +19,16 @@ void SimThread::ConfigureLog(const proto::Configure& request, proto::Configured&
                                (from_flag ? " (--log), which ends with the daemon" : "; StopLog first"));
     }
     Config setup = config_;  // what the header records: the world as it is now
-    setup.log_file = NewLogPath(config_.logs_dir, start.name(), start.overwrite());
+    NewLogFile file = CreateLogFile(config_.logs_dir, start.name(), start.overwrite());
+    setup.log_file = file.path;
     setup.log_label = start.label();
     setup.conditions = sim_.conditions();
     setup.randomize_seed = sim_.randomize_seed();
     setup.randomize_every_frames = sim_.randomize_every();
     try {
-      logger_ = std::make_unique<RunLogger>(setup, sim_.scene(), sim_.state(), counters_);
+      logger_ = std::make_unique<RunLogger>(std::move(file.fd), setup, sim_.scene(), sim_.state(), counters_);
     } catch (const std::exception& error) {
+      file.Discard();  // no empty or headless log left behind
       throw ConfigureError(proto::ERROR_CODE_IO, std::string("StartLog: ") + error.what());
     }
     scheduler_.SetObserver(logger_.get());

@@ -6,6 +6,7 @@
 
 #include "server/common/check.h"
 #include "server/common/limits.h"
+#include "server/common/quoted.h"
 #include "server/daemon/map_authoring.h"
 #include "server/daemon/named_files.h"
 #include "server/daemon/run_logger.h"
@@ -178,7 +179,7 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       change.world_changed = false;
       break;
     case Kind::kOpenMap:
-      answer.set_map_text(ReadMapFile(config_.maps_dir, request.open_map().name()));
+      answer.set_map_text(ReadMapFile(config_.maps_dir, request.open_map().name(), "OpenMap.name"));
       change.world_changed = false;
       break;
     case Kind::kStartLog:
@@ -219,13 +220,16 @@ void Simulation::LoadMap(const proto::LoadMap& load, Change& change) {
   }
   std::shared_ptr<const map::Map> loaded;
   if (load.has_name()) {
-    const std::string path = config_.maps_dir + "/" + load.name() + ".map";
-    if (!std::filesystem::is_regular_file(path)) {
-      throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
-                           "LoadMap.name '" + load.name() + "': no such map (looked for " + path +
-                               "); shipped maps are e.g. 'tracking/hard_urban', 'driving/train/01_urban'");
-    }
-    loaded = Checked([&] { return std::make_shared<const map::Map>(map::LoadMapFile(path)); });
+    // Read beneath --maps-dir with no link followed, like OpenMap; a parse
+    // error names the map, not where a link might have led.
+    const std::string text = ReadMapFile(config_.maps_dir, load.name(), "LoadMap.name");
+    loaded = Checked([&] {
+      try {
+        return std::make_shared<const map::Map>(map::ParseMap(text));
+      } catch (const std::invalid_argument& error) {
+        throw std::invalid_argument("LoadMap.name " + Quoted(load.name()) + ": " + error.what());
+      }
+    });
   } else {
     loaded = Checked([&] {
       try {

@@ -8,6 +8,7 @@
 #include "server/common/diagnostics.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
+#include "server/session/access_token.h"
 #include "server/session/configure_check.h"
 
 namespace sim4cv::session {
@@ -116,11 +117,26 @@ Outcome ClientProtocol::HandleHello(const proto::Hello& hello, proto::Envelope& 
                       std::to_string(limits::kMaxNameBytes) + " (limits::kMaxNameBytes); connect with a shorter name",
                   true, reply);
   }
+  if (const std::string problem = RefuseToken(hello); !problem.empty()) {
+    return Refuse(proto::ERROR_CODE_UNAUTHENTICATED, problem, true, reply);
+  }
   handshaken_ = true;
   client_name_ = hello.client_name();
   FillWelcome(context_, client_, *reply.mutable_welcome());
   LOG_INFO("client " << client_ << " (" << Quoted(client_name_) << ") completed the handshake");
   return Outcome::kReply;
+}
+
+std::string ClientProtocol::RefuseToken(const proto::Hello& hello) const {
+  const std::string& expected = context_.access_token;
+  if (expected.empty() || authenticated_ || TokenMatches(hello.token(), expected)) return {};
+  LOG_INFO("client " << client_ << " (" << Quoted(hello.client_name()) << ") refused: "
+                     << (hello.token().empty() ? "no access token" : "a wrong access token"));
+  return std::string(hello.token().empty() ? "Hello carries no access token (Hello.token)"
+                                           : "Hello.token is not this daemon's access token") +
+         "; sim4cvd admits only clients that show it (docs/security.md). It is in " + context_.access_token_file +
+         ", readable only by the daemon's user, whose clients read it by themselves for local addresses; "
+         "elsewhere set SIM4CV_TOKEN to its content";
 }
 
 Outcome ClientProtocol::HandleSubscribe(const proto::Subscribe& subscribe, proto::Envelope& reply) {

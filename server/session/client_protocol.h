@@ -45,6 +45,10 @@ class ClientProtocol {
   // the sim thread last published it.
   static void FillWelcome(const ServerContext& context, ClientId client, proto::Welcome& welcome);
 
+  // The transport has established who the client is (the shm socket's peer
+  // credentials, the studio's cookie): Hello needs no token.
+  void MarkAuthenticated() { authenticated_ = true; }
+
   // The transport delivered one frame; a lockstep client may Step again.
   void OnFrameSent() { OnFramesSent(1); }
   // `count` frames reached the client at once (the shm ring counts them).
@@ -70,6 +74,8 @@ class ClientProtocol {
 
  private:
   Outcome HandleHello(const proto::Hello& hello, proto::Envelope& reply);
+  // Empty if `hello` may proceed; else why not (its token is missing or wrong).
+  std::string RefuseToken(const proto::Hello& hello) const;
   Outcome HandleSubscribe(const proto::Subscribe& subscribe, proto::Envelope& reply);
   Outcome HandleStep(proto::Envelope& reply);
   Outcome HandleNextFrame(proto::Envelope& reply);
@@ -89,6 +95,7 @@ class ClientProtocol {
   FrameMailbox* mailbox_;
   std::string client_name_;
   bool handshaken_ = false;
+  bool authenticated_ = false;  // MarkAuthenticated: no token needed
   bool subscribed_ = false;
   bool with_state_ = false;
   uint32_t camera_index_ = 0;

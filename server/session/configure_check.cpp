@@ -82,17 +82,21 @@ class Checker {
     True(!value.empty(), [&] { return std::string(field) + " is empty; give the map a name"; });
     bool fine = value.size() <= kMaxMapNameBytes;
     bool part_start = true;
+    std::size_t part_bytes = 0;
     for (char c : value) {
       const bool word = std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
       fine = fine && (word || (c == '.' && !part_start) || (c == '/' && !part_start));
       part_start = c == '/';
+      part_bytes = part_start ? 0 : part_bytes + 1;
+      fine = fine && part_bytes <= limits::kMaxFileNamePartBytes;
     }
     return True(fine && !part_start, [&] {
       return std::string(field) + " " + Quoted(value) +
              " must be a map's path under the maps folder without '.map', e.g. 'studio/my_town': "
              "parts of letters, digits, '_', '-' and '.' separated by '/', none empty or starting with '.', "
              "at most " +
-             std::to_string(kMaxMapNameBytes) + " bytes";
+             std::to_string(kMaxMapNameBytes) + " bytes, a part at most " +
+             std::to_string(limits::kMaxFileNamePartBytes) + " (limits::kMaxFileNamePartBytes)";
     });
   }
   Checker& MapText(const char* field, const std::string& text) {

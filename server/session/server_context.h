@@ -76,6 +76,11 @@ struct ServerContext {
   LatestState& latest_state;
   uint32_t max_message_bytes;
   Counters& counters;
+  // What Hello.token must be (docs/security.md); empty with --no-auth.
+  std::string access_token;
+  // Where the daemon wrote it, for the refusal's message (the file is
+  // readable only by the daemon's user).
+  std::string access_token_file;
 };
 
 }  // namespace sim4cv::session

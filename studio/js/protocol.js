@@ -48,8 +48,12 @@ export class StudioSocket {
       this.ws = new WebSocket(this.url);
       this.ws.binaryType = "arraybuffer";
       this.helloWaiter = { resolve, reject };
+      // The daemon's access token (docs/security.md): the cookie the page's
+      // ?token= URL set carries it; Hello carries it too, for a browser that
+      // keeps no cookies.
+      const token = new URLSearchParams(globalThis.location?.search ?? "").get("token");
       this.ws.onopen = () =>
-        this.send({ hello: { protocol_version: PROTOCOL_VERSION, client_name: this.clientName } });
+        this.send({ hello: { protocol_version: PROTOCOL_VERSION, client_name: this.clientName, ...(token ? { token } : {}) } });
       this.ws.onmessage = (event) => this.dispatch(event.data);
       this.ws.onclose = (event) => this.closedBy(`WebSocket closed (${event.code}${event.reason ? ": " + event.reason : ""})`);
       this.ws.onerror = () => {};  // onclose follows with the code

@@ -38,7 +38,7 @@ class HardeningTcpTest : public DaemonTest {
 
   std::unique_ptr<RawConnection> Handshaken(const std::string& name = "raw") {
     auto raw = std::make_unique<RawConnection>(daemon_->tcp_port());
-    EXPECT_TRUE(raw->Send(FramedHello(name)));
+    EXPECT_TRUE(raw->Send(FramedHello(name, daemon_->access_token())));
     const auto welcome = raw->Receive();
     EXPECT_TRUE(welcome && welcome->has_welcome());
     return raw;

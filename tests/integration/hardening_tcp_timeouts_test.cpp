@@ -29,7 +29,7 @@ class HardeningTcpTimeoutsTest : public DaemonTest {
 
   std::unique_ptr<RawConnection> Handshaken() {
     auto raw = Raw();
-    EXPECT_TRUE(raw->Send(FramedHello()));
+    EXPECT_TRUE(raw->Send(FramedHello("raw", daemon_->access_token())));
     const auto welcome = raw->Receive();
     EXPECT_TRUE(welcome && welcome->has_welcome());
     return raw;
@@ -79,7 +79,7 @@ TEST_F(HardeningTcpTimeoutsTest, SilentConnectionsAreClosedAfterTheHandshakeTime
 TEST_F(HardeningTcpTimeoutsTest, AHelloTrickledByteByByteIsClosedAfterTheHandshakeTimeout) {
   StartDaemon({"--handshake-timeout-ms", "500", "--message-timeout-ms", "0"});
   auto raw = Raw();
-  const auto error = Trickle(*raw, FramedHello("a-long-name-sent-slowly"), 100ms);
+  const auto error = Trickle(*raw, FramedHello("a-long-name-sent-slowly", daemon_->access_token()), 100ms);
   ExpectClosedNaming(*raw, proto::ERROR_CODE_NOT_HANDSHAKEN, "--handshake-timeout-ms", error);
 }
 

@@ -37,10 +37,12 @@ inline std::string Framed(const proto::Envelope& envelope) {
   return bytes;
 }
 
-inline std::string FramedHello(const std::string& name = "raw") {
+// `token`: the daemon's access token (DaemonProcess::access_token).
+inline std::string FramedHello(const std::string& name, const std::string& token) {
   proto::Envelope hello;
   hello.mutable_hello()->set_protocol_version(wire::kProtocolVersion);
   hello.mutable_hello()->set_client_name(name);
+  hello.mutable_hello()->set_token(token);
   return Framed(hello);
 }
 

@@ -19,6 +19,7 @@ sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 
 import sim4cv  # noqa: E402
 from sim4cv import ServerError, pb  # noqa: E402
+from sim4cv.access import access_token  # noqa: E402
 
 FRAME_TIMEOUT_S = 20.0
 
@@ -308,6 +309,7 @@ def test_fatal_protocol_errors(daemon, connect, case):
     hello = pb.Envelope()
     hello.hello.protocol_version = 1
     hello.hello.client_name = case
+    hello.hello.token = access_token("tcp", "127.0.0.1", daemon.port)
     client.send_envelope(hello)
     assert client.receive_envelope(FRAME_TIMEOUT_S).WhichOneof("kind") == "welcome"
     if case == "garbage":
@@ -338,6 +340,7 @@ def test_max_message_bytes_flag(start_daemon):
     start_daemon.clients.append(client)
     hello = pb.Envelope()
     hello.hello.protocol_version = 1
+    hello.hello.token = access_token("tcp", "127.0.0.1", d.port)
     client.send_envelope(hello)
     assert client.receive_envelope(FRAME_TIMEOUT_S).WhichOneof("kind") == "welcome"
     client.send_raw(struct.pack("<I", 1001))

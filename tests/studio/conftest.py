@@ -18,6 +18,7 @@ sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 sys.path.insert(0, os.path.join(REPO_ROOT, "tools"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+from sim4cv.access import access_token  # noqa: E402
 from sim4cv.daemon import OwnDaemon  # noqa: E402
 
 MAP = os.path.join(REPO_ROOT, "scenes", "tracking", "easy_urban.map")
@@ -41,6 +42,8 @@ def start_daemon(*args, mode="lockstep"):
     """A sim4cvd with the studio on a free port; .fields["http"] is the port."""
     daemon = OwnDaemon(["--http-port", "0", "--udp-port", "-1"] + list(args), mode=mode)
     daemon.http = int(daemon.fields["http"])
+    # The access token the daemon wrote for its HTTP port (docs/security.md): the page's ?token=.
+    daemon.token = access_token("http", "127.0.0.1", daemon.http)
     return daemon
 
 

@@ -51,7 +51,7 @@ def stepper(daemon):
 
 @pytest.fixture(scope="module")
 def page(daemon, stepper):
-    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?view=uav:rgb&rgb=raw&max_fps=0" % daemon.http,
+    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?view=uav:rgb&rgb=raw&max_fps=0&token=%s" % (daemon.http, daemon.token),
                                           "window.studio && studio.ready && studio.views.length === 1") as page:
         page.wait_for("document.querySelector('#view-0 .view-stats').textContent.startsWith('subscribed')", TIMEOUT_S)
         yield page
@@ -202,7 +202,7 @@ def test_reset_and_load_map_from_the_page(page, stepper):
 def test_a_run_log_started_and_stopped_from_the_page(studio_daemon, tmp_path):
     daemon = studio_daemon("--map", MAP, "--logs-dir", str(tmp_path), mode="realtime")
     checker = sim4cv.connect(daemon.address, name="checker")
-    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?max_fps=5" % daemon.http,
+    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?max_fps=5&token=%s" % (daemon.http, daemon.token),
                                           "window.studio && studio.ready") as page:
         choose(page, "#log-name", "studio/run_1")
         page.evaluate("document.getElementById('log-label').value = 'from the page'")

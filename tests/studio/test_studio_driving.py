@@ -47,7 +47,7 @@ def client(daemon):
 
 @pytest.fixture(scope="module")
 def page(daemon, client):
-    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?max_fps=10" % daemon.http,
+    with Browser() as browser, clean_page(browser, "http://127.0.0.1:%d/?max_fps=10&token=%s" % (daemon.http, daemon.token),
                                           "window.studio && studio.ready && studio.state && studio.map.fitted") as page:
         yield page
 

@@ -60,7 +60,7 @@ def browser():
 
 @pytest.fixture(scope="module")
 def page(daemon, browser):
-    with clean_page(browser, "http://127.0.0.1:%d/editor.html" % daemon.http, "window.editor && editor.ready") as page:
+    with clean_page(browser, "http://127.0.0.1:%d/editor.html?token=%s" % (daemon.http, daemon.token), "window.editor && editor.ready") as page:
         page.evaluate("window.confirmed = []; window.confirm = (m) => { confirmed.push(m); return true; }")
         yield page
 
@@ -403,7 +403,7 @@ def test_generate_and_dress_come_from_the_daemon_and_undo(page, client):
 def test_3d_preview_shows_a_camera_that_orbits_the_map(studio_daemon, browser, maps_dir):
     daemon = studio_daemon("--map", os.path.join(maps_dir, TEST_MAP + ".map"), "--maps-dir", maps_dir,
                            mode="realtime")
-    page = browser.new_page("http://127.0.0.1:%d/editor.html" % daemon.http)
+    page = browser.new_page("http://127.0.0.1:%d/editor.html?token=%s" % (daemon.http, daemon.token))
     try:
         page.wait_for("window.editor && editor.ready", TIMEOUT_S)
         press(page, "#preview")

@@ -231,3 +231,24 @@ def test_the_pages_semantic_palette_is_the_protocols():
     table = script[script.index("SEMANTIC_COLOURS = {"):script.index("};", script.index("SEMANTIC_COLOURS = {"))]
     shown = {int(v): [int(r), int(g), int(b)] for v, r, g, b in re.findall(r"(\d+): \[(\d+), (\d+), (\d+)\]", table)}
     assert shown == expected
+
+
+def test_the_websocket_admits_the_token_in_hello_or_in_the_cookie_the_page_url_sets(studio_daemon):
+    daemon = studio_daemon()
+    assert len(daemon.token) == 64, "the daemon wrote no token file for its HTTP port"
+    for token in ("", "not-the-token"):
+        ws = RawWebSocket(daemon.http)
+        ws.send_json({"hello": {"protocol_version": 1, "client_name": "stranger", "token": token}})
+        error = error_of(ws.receive_json())
+        assert error["code"] == "ERROR_CODE_UNAUTHENTICATED" and error["fatal"], error
+        assert "access token" in error["message"] and "docs/security.md" in error["message"], error
+    # A wrong ?token= sets no cookie; the right one sets it, for the page's WebSockets only.
+    _, headers, _ = http_get(daemon.http, "/?token=not-the-token")
+    assert "set-cookie" not in headers
+    status, headers, _ = http_get(daemon.http, "/?view=uav:rgb&token=" + daemon.token)
+    assert status == 200
+    cookie = headers["set-cookie"]
+    assert cookie.startswith("sim4cv_token=" + daemon.token + ";") and "HttpOnly" in cookie and "SameSite=Strict" in cookie
+    ws = RawWebSocket(daemon.http, cookie=cookie.split(";")[0], hello="by-cookie", token="")
+    assert ws.welcome["protocol_version"] == 1
+    ws.close()

@@ -14,6 +14,8 @@ import socket
 import struct
 import time
 
+from sim4cv.access import access_token
+
 
 class HandshakeRefused(Exception):
     """The upgrade was answered with an HTTP status other than 101."""
@@ -43,13 +45,17 @@ def http_get(port, path, headers=None, timeout=10.0):
 
 
 class RawWebSocket:
-    def __init__(self, port, path="/ws", host=None, origin=None, timeout=10.0, hello=None):
+    def __init__(self, port, path="/ws", host=None, origin=None, timeout=10.0, hello=None, cookie=None, token=None):
+        """hello: say Hello with this client name; token: its Hello.token (None: the daemon's,
+        from its token file); cookie: a Cookie header for the upgrade."""
         self.sock = socket.create_connection(("127.0.0.1", port), timeout=timeout)
         key = base64.b64encode(os.urandom(16)).decode()
         lines = ["GET %s HTTP/1.1" % path, "Host: %s" % (host or "127.0.0.1:%d" % port), "Upgrade: websocket",
                  "Connection: Upgrade", "Sec-WebSocket-Key: " + key, "Sec-WebSocket-Version: 13"]
         if origin:
             lines.append("Origin: " + origin)
+        if cookie:
+            lines.append("Cookie: " + cookie)
         self.sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
         self.buffer = b""
         while b"\r\n\r\n" not in self.buffer:
@@ -73,7 +79,8 @@ class RawWebSocket:
             self.sock.close()
             raise HandshakeRefused(status, body.decode("utf-8", "replace"))
         if hello:
-            self.send_json({"hello": {"protocol_version": 1, "client_name": hello}})
+            self.send_json({"hello": {"protocol_version": 1, "client_name": hello,
+                                      "token": access_token("http", "127.0.0.1", port) if token is None else token}})
             kind, payload = self.receive()
             assert kind == "text" and "welcome" in json.loads(payload), payload
             self.welcome = json.loads(payload)["welcome"]

@@ -163,3 +163,18 @@ std::vector<std::string> DaemonProcess::warning_lines() const {
 }
 
 }  // namespace sim4cv::testing
+
+namespace sim4cv::testing {
+
+std::string DaemonProcess::access_token() const {
+  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
+  const char* home = std::getenv("HOME");
+  const std::string folder = runtime != nullptr && *runtime == '/' ? std::string(runtime) + "/sim4cv"
+                                                                   : std::string(home ? home : "/tmp") + "/.cache/sim4cv";
+  std::ifstream file(folder + "/tcp-" + std::to_string(tcp_port_) + ".token");
+  std::string token;
+  std::getline(file, token);
+  return token;
+}
+
+}  // namespace sim4cv::testing

@@ -22,6 +22,9 @@ class DaemonProcess {
   DaemonProcess& operator=(const DaemonProcess&) = delete;
 
   uint16_t tcp_port() const { return tcp_port_; }
+  // The access token clients must show in Hello (docs/security.md), read
+  // from the file the daemon wrote for its TCP port, as the clients do.
+  std::string access_token() const;
   // The whole listening line, e.g. "sim4cvd listening tcp=40123".
   const std::string& listening_line() const { return listening_line_; }
   pid_t pid() const { return pid_; }

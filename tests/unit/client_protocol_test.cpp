@@ -97,7 +97,7 @@ proto::Envelope GetState() {
 class ClientProtocolTest : public ::testing::Test {
  protected:
   explicit ClientProtocolTest(proto::SimMode mode = proto::SIM_MODE_LOCKSTEP)
-      : context_{scene_, mode, MakeWelcome(mode), world_, commands_, latest_state_, 1u << 20, counters_},
+      : context_{scene_, mode, MakeWelcome(mode), world_, commands_, latest_state_, 1u << 20, counters_, "", ""},
         protocol_(kClient, context_, link_, &mailbox_) {
     // What the sim thread publishes: here only the scene's first camera.
     world_.Publish(testing::FirstCameraWorld(scene_));

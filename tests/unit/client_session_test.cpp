@@ -24,7 +24,7 @@ using Outcome = ClientProtocol::Outcome;
 class ClientSessionTest : public ::testing::Test {
  protected:
   ClientSessionTest() : context_{scene_, proto::SIM_MODE_LOCKSTEP, Welcome(), world_, commands_, latest_state_,
-                                 1u << 20, counters_} {
+                                 1u << 20, counters_, "", ""} {
     world_.Publish(testing::FirstCameraWorld(scene_, {{"second", 16}}));
     session_ = ClientSession::Create(7, context_, [this] { ++wakes_; });
   }

@@ -84,6 +84,10 @@ class StaticFilesTest : public ::testing::Test {
     Write(root_ / "studio" / "notes.md", "not served");
     Write(root_ / "secret.txt", "outside");
     fs::create_symlink(root_ / "secret.txt", root_ / "studio" / "link.txt");
+    // Hidden files and folders are not the page's (an editor's backup, a checkout's .git).
+    fs::create_directories(root_ / "studio" / ".git");
+    Write(root_ / "studio" / ".git" / "config.txt", "hidden");
+    Write(root_ / "studio" / ".env.json", "{}");
   }
   ~StaticFilesTest() override { fs::remove_all(root_); }
   static void Write(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
@@ -100,6 +104,7 @@ TEST_F(StaticFilesTest, ServesExactlyTheFilesItRead) {
   ASSERT_NE(files.Find("/js/main.js"), nullptr);
   EXPECT_EQ(files.Find("/js/main.js")->content_type, "text/javascript; charset=utf-8");
   for (const char* target : {"/../secret.txt", "/js/../../secret.txt", "/%2e%2e/secret.txt", "/link.txt", "/notes.md",
+                             "/.env.json", "/.git/config.txt",
                              "//index.html", "index.html", ""}) {
     EXPECT_EQ(files.Find(target), nullptr) << target;
   }

@@ -52,7 +52,7 @@ struct Subscriber {
 class SimStandIn {
  public:
   SimStandIn()
-      : context_{scene_, proto::SIM_MODE_REALTIME, MakeWelcome(), world_, commands_, latest_state_, 1u << 20, counters_} {
+      : context_{scene_, proto::SIM_MODE_REALTIME, MakeWelcome(), world_, commands_, latest_state_, 1u << 20, counters_, "", ""} {
     world_.Publish(MakeWorld(scene_));
   }
 

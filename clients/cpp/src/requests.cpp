@@ -14,10 +14,11 @@ void SetVec3(proto::Vec3& out, double x, double y, double z) {
 
 }  // namespace
 
-proto::Envelope HelloRequest(const std::string& client_name, uint32_t protocol_version) {
+proto::Envelope HelloRequest(const std::string& client_name, uint32_t protocol_version, const std::string& token) {
   proto::Envelope envelope;
   envelope.mutable_hello()->set_protocol_version(protocol_version == 0 ? wire::kProtocolVersion : protocol_version);
   envelope.mutable_hello()->set_client_name(client_name);
+  envelope.mutable_hello()->set_token(token);
   return envelope;
 }
 

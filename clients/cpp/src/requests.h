@@ -18,7 +18,12 @@ struct CameraSetup;  // sim4cv/client.h
 namespace sim4cv::detail {
 
 // protocol_version 0 means this build's version.
-proto::Envelope HelloRequest(const std::string& client_name, uint32_t protocol_version);
+// `token`: Hello.token, the daemon's access token (AccessToken).
+proto::Envelope HelloRequest(const std::string& client_name, uint32_t protocol_version, const std::string& token = {});
+// The access token for the daemon's `kind` ("tcp", "udp") endpoint at
+// host:port: SIM4CV_TOKEN, or for a local host the daemon's token file for
+// it (docs/security.md); empty if neither.
+std::string AccessToken(const std::string& kind, const std::string& host, uint16_t port);
 proto::Envelope SubscribeRequest(const std::string& camera, const std::vector<proto::Channel>& channels,
                                  proto::Delivery delivery, bool with_state);
 proto::Envelope StepRequest();

@@ -30,7 +30,7 @@ _CLIENTS = {"tcp": TcpClient, "udp": UdpClient, "shm": ShmClient}
 
 
 def connect(address: str, name: str = "python-client", timeout: float = 5.0, reconnect: bool = False,
-            **options) -> BaseClient:
+            token: str = None, **options) -> BaseClient:
     """Connects to sim4cvd and says Hello; returns a TcpClient, UdpClient or
     ShmClient (one API, see BaseClient) whose .welcome is the Welcome.
 
@@ -40,9 +40,12 @@ def connect(address: str, name: str = "python-client", timeout: float = 5.0, rec
     naming the address and transport within `timeout` seconds. reconnect:
     re-establish the session (Hello, last Subscribe) when it is lost.
     options go to the transport's class (e.g. receive_buffer_bytes for UDP).
+    token: the daemon's access token (docs/security.md); by default
+    SIM4CV_TOKEN, or for a local address the file the daemon wrote for it.
     """
     parsed = parse_address(address)
     client = _CLIENTS[parsed.transport](parsed, name=name, timeout=timeout, reconnect=reconnect, **options)
+    client.token = token
     try:
         client.hello()
     except BaseException:

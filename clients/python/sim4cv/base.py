@@ -10,6 +10,7 @@ import time
 from typing import Iterable, Iterator, Optional
 
 from ._proto import pb
+from .access import access_token
 from .address import Address, parse_address
 from .errors import ConnectionClosed, ServerError
 from .frame import Frame
@@ -54,6 +55,8 @@ class BaseClient(WorldRequests):
         self._request_id = 0
         self._open_now = False
         self._closed_by_user = False
+        # Hello.token; None: SIM4CV_TOKEN or the daemon's token file (sim4cv.access)
+        self.token: Optional[str] = None
 
     # -- context manager ---------------------------------------------------
     def __enter__(self):
@@ -79,7 +82,12 @@ class BaseClient(WorldRequests):
         if not self._open_now:
             self._open(timeout)
             self._open_now = True
-        hello = envelope(hello=pb.Hello(protocol_version=protocol_version, client_name=self.name))
+        token = self.token
+        if token is None:
+            # shm admits only the daemon's own user (peer credentials) and needs none
+            token = access_token(self.address.transport, self.address.host, self.address.port) \
+                if self.address.transport != "shm" else ""
+        hello = envelope(hello=pb.Hello(protocol_version=protocol_version, client_name=self.name, token=token))
         try:
             self.welcome = self._exchange(hello, "welcome", timeout)
         except TimeoutError as e:

@@ -25,6 +25,7 @@ import socket
 import time
 
 from ._proto import pb
+from .access import access_token
 from .errors import ConnectionClosed, ProtocolError, ServerError  # noqa: F401 (re-exported)
 from .framing import (  # noqa: F401 (re-exported for existing users of sim4cv.client)
     DEFAULT_MAX_MESSAGE_BYTES, LENGTH_PREFIX_BYTES, PROTOCOL_VERSION, FramedSocket, decode_envelope,
@@ -153,13 +154,15 @@ class Client(WorldRequests):
         self._queued = collections.deque(item for item in self._queued if isinstance(item, pb.Error))
 
     # -- session -----------------------------------------------------------
-    def connect(self, host, port, name="python-client", timeout=5.0, protocol_version=PROTOCOL_VERSION):
+    def connect(self, host, port, name="python-client", timeout=5.0, protocol_version=PROTOCOL_VERSION, token=None):
         """Connects, sends Hello and returns the Welcome.
-        Raises ServerError (e.g. VERSION_MISMATCH, TOO_MANY_CLIENTS)."""
+        Raises ServerError (e.g. VERSION_MISMATCH, TOO_MANY_CLIENTS, UNAUTHENTICATED).
+        token: Hello.token; None: SIM4CV_TOKEN or the daemon's token file (sim4cv.access)."""
         self.connect_raw(host, port, timeout)
         envelope = pb.Envelope()
         envelope.hello.protocol_version = protocol_version
         envelope.hello.client_name = name
+        envelope.hello.token = access_token("tcp", host, port) if token is None else token
         self.send_envelope(envelope)
         self.welcome = self._receive_kind("welcome", timeout)
         return self.welcome

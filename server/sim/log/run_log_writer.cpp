@@ -24,16 +24,19 @@ int64_t NowUnixNs() {
 }  // namespace
 
 RunLogWriter::RunLogWriter(const std::string& path, const RunLogHeader& header, RunLogWriterOptions options)
-    : path_(path), header_(header), options_(options) {
+    // O_APPEND: after a failed write is cut off by ftruncate, the next write
+    // lands at the new end, not at the old offset past a hole.
+    // A FIFO or device is refused, never waited on (finding 7).
+    : RunLogWriter(OpenRegularFile(path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND, "run log",
+                                   FileKinds::kRegularOrCharacterDevice),
+                   path, header, options) {}
+
+RunLogWriter::RunLogWriter(int fd, const std::string& path, const RunLogHeader& header, RunLogWriterOptions options)
+    : path_(path), header_(header), options_(options), fd_(fd) {
   header_.record_version = kRecordVersion;
   if (header_.created_unix_ns == 0) header_.created_unix_ns = NowUnixNs();
-  codec::EncodeFileStart(header_, &buffer_);
-  // O_APPEND: after a failed write is cut off by ftruncate, the next write
-  // lands at the new end, not at the old offset past a hole.
-  // A FIFO or device is refused, never waited on (finding 7).
-  fd_ = OpenRegularFile(path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND, "run log",
-                        FileKinds::kRegularOrCharacterDevice);
   try {
+    codec::EncodeFileStart(header_, &buffer_);
     WriteBuffer("write header");
   } catch (...) {
     ::close(fd_);

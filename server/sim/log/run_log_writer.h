@@ -27,6 +27,11 @@ class RunLogWriter {
   // with kRecordVersion. Throws std::system_error naming the path and the
   // errno text, or std::invalid_argument for a header too large to encode.
   RunLogWriter(const std::string& path, const RunLogHeader& header, RunLogWriterOptions options = {});
+  // The same on a file the caller created and opened for writing with
+  // O_APPEND (a client's StartLog, opened beneath --logs-dir); takes
+  // ownership of `fd` (closed if the header cannot be written). `path` is
+  // for messages.
+  RunLogWriter(int fd, const std::string& path, const RunLogHeader& header, RunLogWriterOptions options = {});
   ~RunLogWriter();
   RunLogWriter(const RunLogWriter&) = delete;
   RunLogWriter& operator=(const RunLogWriter&) = delete;

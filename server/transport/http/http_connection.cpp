@@ -4,10 +4,12 @@
 
 #include <boost/beast/websocket.hpp>
 #include <charconv>
+#include <utility>
 
 #include "server/common/diagnostics.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
+#include "server/session/access_token.h"
 #include "server/transport/http/ws_session.h"
 
 namespace sim4cv::transport {
@@ -136,6 +138,13 @@ void HttpConnection::OnRequest(const boost::system::error_code& error) {
   if (path == "/clock") {
     return Respond(http::status::ok, std::to_string(MonotonicNs()), "text/plain", keep_alive);
   }
+  // The studio opened as http://HOST:PORT/?token=T: the page's WebSockets
+  // carry T in a cookie from then on (docs/security.md).
+  const std::string& token = hub_.context->access_token;
+  const std::string given = session::QueryValue(target.substr(path.size() + (path.size() < target.size())), "token");
+  if (!token.empty() && !given.empty() && session::TokenMatches(given, token)) {
+    set_cookie_ = std::string(session::kTokenCookie) + "=" + given + "; Path=/; HttpOnly; SameSite=Strict";
+  }
   const StaticFiles::File* file = hub_.files.Find(path);
   if (file == nullptr) {
     return Respond(http::status::not_found, "no such studio file: " + Quoted(path) + "\n", "text/plain", keep_alive);
@@ -159,10 +168,14 @@ void HttpConnection::Upgrade(Request request) {
   std::string problem;
   const auto view = ParseViewQuery(question == std::string::npos ? "" : target.substr(question + 1), problem);
   if (!view) return Respond(http::status::bad_request, problem + "\n", "text/plain", false);
+  // The cookie the page's ?token= URL set stands for Hello.token.
+  const std::string& token = hub_.context->access_token;
+  const bool authenticated =
+      !token.empty() && session::TokenMatches(session::CookieValue(std::string(request[http::field::cookie]), session::kTokenCookie), token);
   handed_over_ = true;
   auto session = std::make_shared<WsSession>(std::move(stream_), key_, hub_, *view);
   hub_.Register(key_, session, false);  // replaces this connection, which goes when its handler returns
-  session->Start(std::move(request));
+  session->Start(std::move(request), authenticated);
 }
 
 void HttpConnection::Respond(http::status status, std::string body, const std::string& content_type, bool keep_alive) {
@@ -174,6 +187,7 @@ void HttpConnection::Respond(http::status status, std::string body, const std::s
   response_.set(http::field::content_type, content_type);
   response_.set(http::field::cache_control, "no-store");  // a restarted daemon's page must not be stale
   response_.set("X-Content-Type-Options", "nosniff");
+  if (!set_cookie_.empty()) response_.set(http::field::set_cookie, std::exchange(set_cookie_, {}));
   response_.keep_alive(keep_alive);
   response_.body() = std::move(body);
   response_.prepare_payload();

@@ -55,6 +55,7 @@ class HttpConnection : public HttpPeer, public std::enable_shared_from_this<Http
   boost::beast::http::response<boost::beast::http::string_body> response_;
   bool closed_ = false;
   bool handed_over_ = false;  // the socket is a WsSession's now
+  std::string set_cookie_;    // the studio's token cookie, sent with the next response
 };
 
 }  // namespace sim4cv::transport

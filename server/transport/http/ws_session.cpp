@@ -50,9 +50,10 @@ void WsSession::Accept(Request request, std::function<void()> then) {
                    });
 }
 
-void WsSession::Start(Request request) {
-  Accept(std::move(request), [this] {
+void WsSession::Start(Request request, bool authenticated) {
+  Accept(std::move(request), [this, authenticated] {
     CreateSession(*hub_.context);
+    if (authenticated) session_->protocol().MarkAuthenticated();
     LOG_INFO("client " << client_ << " connected over WebSocket");
     ArmTimer();
     ContinueReading();

@@ -44,7 +44,8 @@ class WsSession : public HttpPeer, public StreamSession<WsSession>, public std::
 
   // Completes the upgrade `request` asked for and serves the client. Must be
   // called once, on the Asio thread, after construction through make_shared.
-  void Start(boost::beast::http::request<boost::beast::http::empty_body> request);
+  // `authenticated`: the request's cookie carried the access token.
+  void Start(boost::beast::http::request<boost::beast::http::empty_body> request, bool authenticated);
   // Completes the upgrade, sends this fatal Error and closes (over the cap).
   void Reject(boost::beast::http::request<boost::beast::http::empty_body> request, proto::ErrorCode code,
               const std::string& message);

@@ -25,6 +25,7 @@ class TcpLink : public Link {
  public:
   TcpLink(const std::string& host, uint16_t port, Deadline deadline, uint32_t max_message_bytes)
       : address_("tcp://" + host + ":" + std::to_string(port)),
+        token_(AccessToken("tcp", host, port)),
         max_message_bytes_(max_message_bytes),
         fd_(ConnectTcp(host, port, deadline)) {}
   ~TcpLink() override { Close(); }
@@ -32,7 +33,7 @@ class TcpLink : public Link {
   const std::string& address() const override { return address_; }
 
   proto::Welcome Hello(const std::string& client_name, uint32_t protocol_version, Deadline deadline) override {
-    Send(HelloRequest(client_name, protocol_version));
+    Send(HelloRequest(client_name, protocol_version, token_));
     Envelope reply;
     // Nothing but the answer comes before Welcome.
     if (!Receive(reply, deadline, false)) throw ConnectionError("timed out waiting for Welcome from " + address_);
@@ -135,6 +136,7 @@ class TcpLink : public Link {
   }
 
   std::string address_;
+  std::string token_;  // Hello.token (AccessToken)
   uint32_t max_message_bytes_;
   int fd_ = -1;
   std::string buffer_;       // body of the envelope being read; only grows

@@ -57,7 +57,7 @@ void UdpClient::Connect(const std::string& host, uint16_t port, const std::strin
   const Deadline deadline = Clock::now() + timeout;
   Open(host, port);
   try {
-    const Envelope hello = detail::HelloRequest(client_name, protocol_version);
+    const Envelope hello = detail::HelloRequest(client_name, protocol_version, detail::AccessToken("udp", host, port));
     Envelope reply;
     if (!Request(hello, Envelope::kWelcome, reply, deadline)) {
       throw ConnectionError(TimeoutMessage("Welcome", timeout, peer_) + " (is that the udp= port of its listening line?)");
