@@ -29,17 +29,22 @@ class DaemonError(RuntimeError):
     command line and the end of its stderr)."""
 
 
-def installed_daemon() -> Optional[str]:
-    """An installed sim4cvd (the .deb, cmake --install): on PATH, or in bin/ of this Python's
-    prefix, /usr/local or /usr; None if there is none."""
-    found = shutil.which("sim4cvd")
+def installed_program(name: str) -> Optional[str]:
+    """An installed sim4cv program (the .deb, cmake --install): on PATH, or in bin/ of this
+    Python's prefix, /usr/local or /usr; None if there is none."""
+    found = shutil.which(name)
     if found:
         return os.path.abspath(found)
     for prefix in (sys.prefix, "/usr/local", "/usr"):
-        candidate = os.path.join(prefix, "bin", "sim4cvd")
+        candidate = os.path.join(prefix, "bin", name)
         if os.access(candidate, os.X_OK):
             return candidate
     return None
+
+
+def installed_daemon() -> Optional[str]:
+    """An installed sim4cvd; None if there is none."""
+    return installed_program("sim4cvd")
 
 
 def daemon_path() -> str:

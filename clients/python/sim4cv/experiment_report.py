@@ -1,6 +1,7 @@
 """Tables, plots and report.md of sim4cv.experiment (docs/tracking.md,
 "Experiments"). Plots use matplotlib's Agg backend; trajectory maps are
-build/tools/sim4cv_logdraw (every UAV of every run log, one colour per log)."""
+sim4cv_logdraw (every UAV of every run log, one colour per log): $SIM4CV_LOGDRAW, else the
+source tree's build/tools/, else an installed one."""
 
 import csv
 import math
@@ -10,9 +11,11 @@ import statistics
 import subprocess
 
 from . import strict_json
-from .daemon import REPO_ROOT
+from .daemon import IN_SOURCE_TREE, REPO_ROOT, installed_program
 
-LOGDRAW = os.environ.get("SIM4CV_LOGDRAW", os.path.join(REPO_ROOT, "build", "tools", "sim4cv_logdraw"))
+LOGDRAW = os.environ.get("SIM4CV_LOGDRAW") or (
+    os.path.join(REPO_ROOT, "build", "tools", "sim4cv_logdraw") if IN_SOURCE_TREE
+    else installed_program("sim4cv_logdraw") or "sim4cv_logdraw")
 
 
 def machine():
