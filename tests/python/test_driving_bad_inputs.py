@@ -80,7 +80,8 @@ def test_a_model_pt_that_would_run_code_is_refused_unloaded(tmp_path):
 
     evil = tmp_path / "model.pt"
     torch.save({"settings": Payload(), "state_dict": {}}, str(evil))
-    with pytest.raises(dt.TrainError, match=r"model\.pt: refers to posix\.system; a model\.pt holds only tensors"):
+    from sim4cv.driving_weights import WeightsError
+    with pytest.raises(WeightsError, match=r"model\.pt: refers to posix\.system; a model\.pt holds only tensors"):
         dt.load_model(str(evil))
     r = _evaluate("--model", str(evil), "--maps", TEST_MAP, "--out", str(tmp_path / "eval"), timeout=60)
     assert r.returncode == 2 and "refers to posix.system" in r.stderr

@@ -34,7 +34,7 @@ def test_the_shipped_card_fills_unset_settings_and_flags_win():
     p, a = _args(["--steer-gain", "0.8"])
     sources = dcard.apply(a, card)
     controller = dc.from_arguments(p, a)
-    assert (controller.steer_waypoint, controller.gain, controller.slowdown) == (2, 0.8, 0.0)
+    assert (controller.steer_waypoint, controller.gain, controller.slowdown) == (2, 0.8, 0.5)
     assert (a.speed, a.frame_hz) == (8.0, 30.0)
     assert sources["steer_gain"] == "--steer-gain"
     assert sources["steer_waypoint"] == "model card %s" % os.path.join(SHIPPED, "model.json")
@@ -81,7 +81,7 @@ def test_the_plain_command_drives_the_shipped_model_as_it_was_selected(tmp_path)
     assert "steer_waypoint 2 (model card" in r.stdout and "steer_gain 0.9 (model card" in r.stdout
     report = json.loads((out / "driving.json").read_text())
     s = report["settings"]
-    assert (s["steer_waypoint"], s["steer_gain"], s["speed_m_s"], s["frame_hz"]) == (2, 0.9, 8.0, 30.0)
+    assert (s["steer_waypoint"], s["steer_gain"], s["slowdown"], s["speed_m_s"], s["frame_hz"]) == (2, 0.9, 0.5, 8.0, 30.0)
     assert s["settings_from"]["steer_gain"].startswith("model card ")
     o = report["overall"]
     assert o["completed"] == 1 and o["lane_departures"] == 0

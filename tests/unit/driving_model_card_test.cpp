@@ -42,7 +42,7 @@ TEST_F(ModelCardTest, TheShippedCardHoldsTheSelectedControllerSettings) {
   EXPECT_EQ(card->steer_waypoint, 2);
   EXPECT_DOUBLE_EQ(card->steer_gain.value(), 0.9);
   EXPECT_DOUBLE_EQ(card->speed_m_s.value(), 8.0);
-  EXPECT_DOUBLE_EQ(card->turn_slowdown.value(), 0.0);
+  EXPECT_DOUBLE_EQ(card->turn_slowdown.value(), 0.5);
   EXPECT_NO_THROW(card->CheckModel(90, 160, true));
 }
 

@@ -22,17 +22,17 @@ class AverageError(RuntimeError):
 
 
 def average(paths: Sequence[str], out: str, log=print) -> dict:
-    import torch
     from .driving_net import export_onnx
     from . import driving_card
-    from .driving_train import TrainError, _save, load_model, load_saved
+    from .driving_train import _save, load_model
+    from .driving_weights import load_saved
     if len(paths) < 2:
         raise AverageError("average needs at least 2 models, got %d" % len(paths))
     saved = []
     for p in paths:
         try:
             saved.append(load_saved(p))
-        except (OSError, RuntimeError, EOFError, ValueError, pickle.UnpicklingError, TrainError) as e:
+        except (OSError, RuntimeError, EOFError, ValueError, pickle.UnpicklingError) as e:
             raise AverageError("%s: not a model.pt (%s)" % (p, e))
         if not isinstance(saved[-1], dict) or "state_dict" not in saved[-1] or "settings" not in saved[-1]:
             raise AverageError("%s: not a model.pt of sim4cv.driving_train (no state_dict and settings)" % p)

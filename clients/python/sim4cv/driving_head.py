@@ -32,8 +32,9 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader, Dataset, WeightedRandomSampler
 
-from sim4cv.driving_train import (DrivingDataset, TrainError, _check_out, _order, _save, _write, load_saved,
+from sim4cv.driving_train import (DrivingDataset, TrainError, _check_out, _order, _save, _write,
                                   add_shared_arguments, check_run, model_from, record_weights, refusing)
+from sim4cv.driving_weights import load_saved
 
 # what makes two head models different (a rerun with other ones is refused unless --force)
 HEAD_SETTINGS = ("train", "val", "epochs", "batch", "lr", "init", "junction_weight", "obstacle_weight",

@@ -22,12 +22,9 @@ import copy
 import csv
 import json
 import math
-import io
 import os
-import pickletools
 import sys
 import time
-import zipfile
 from typing import Dict, List, Optional
 
 import numpy as np
@@ -35,6 +32,7 @@ import torch
 from torch.utils.data import ConcatDataset, DataLoader, Dataset, WeightedRandomSampler
 
 from sim4cv import driving_card
+from sim4cv.driving_weights import load_saved
 from sim4cv.driving_net import DEFAULT_HEIGHT, DEFAULT_WIDTH, WaypointNet, export_onnx
 
 TARGETS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
@@ -307,47 +305,6 @@ def _save(path: str, state, settings: dict, epoch: int) -> None:
     """A model.pt: the weights with the settings load_model needs."""
     os.makedirs(os.path.dirname(path), exist_ok=True)
     torch.save(dict(state_dict=state, settings=settings, best_epoch=epoch, targets=TARGETS), path)
-
-
-# The only globals a model.pt of `_save` refers to: torch's tensor rebuilding and ordered dicts.
-ALLOWED_GLOBALS = {"collections OrderedDict", "torch._utils _rebuild_tensor_v2", "torch._utils _rebuild_parameter"}
-
-
-def check_pickle(data: bytes, name: str) -> None:
-    """Refuses a pickle that imports anything but ALLOWED_GLOBALS and torch's
-    storages (os.system, builtins.eval, ...): what loading it could run.
-    Scanned before unpickling, since torch 1.13's weights_only=True cannot
-    read the floats a model.pt's settings hold, and its torch.load ignores
-    a restricted pickle_module."""
-    try:
-        for op, arg, _ in pickletools.genops(data):
-            if op.name in ("GLOBAL", "INST"):
-                module, _, attribute = str(arg).partition(" ")
-                if str(arg) not in ALLOWED_GLOBALS and not (module == "torch" and attribute.endswith("Storage")):
-                    raise TrainError("%s: refers to %s.%s; a model.pt holds only tensors, numbers, strings and "
-                                     "containers (not loaded: it could run code)" % (name, module, attribute))
-            elif op.name in ("STACK_GLOBAL", "EXT1", "EXT2", "EXT4", "OBJ"):
-                raise TrainError("%s: uses the pickle instruction %s, which torch.save never writes (not loaded: "
-                                 "it could run code)" % (name, op.name))
-    except (ValueError, EOFError) as e:  # pickletools' complaints about a broken stream
-        raise TrainError("%s: a damaged model.pt (%s)" % (name, e)) from None
-
-
-def load_saved(source, name: str = "") -> dict:
-    """A model.pt's contents (a path, or a file object and its name for
-    messages), loaded only after check_pickle passed its data.pkl."""
-    name = name or str(source)
-    data = source.read() if hasattr(source, "read") else open(source, "rb").read()
-    try:
-        with zipfile.ZipFile(io.BytesIO(data)) as z:
-            pickles = [n for n in z.namelist() if n.endswith(".pkl")]
-            if not pickles:
-                raise TrainError("%s: no pickled data inside; not a model.pt of `train`" % name)
-            for n in pickles:
-                check_pickle(z.read(n), name)
-    except zipfile.BadZipFile:
-        raise TrainError("%s: not a model.pt of `train` (torch's zip format; empty or truncated?)" % name) from None
-    return torch.load(io.BytesIO(data), map_location="cpu")
 
 
 def load_model(path: str) -> WaypointNet:
