@@ -12,33 +12,30 @@ reference: AUC and precision at their best). A result file is written last,
 by renaming, so one that exists is complete and is skipped on resume.
 """
 
-import concurrent.futures
 import glob
 import math
-import multiprocessing
 import os
 import time
 
 import numpy as np
 
 
-def sequences_dir(exp, out_dir, jobs, say):
-    """The folder of sequences: the given one, or generated into OUT/sequences."""
+def generation_specs(exp):
+    """The sim4cv.sequences Specs to generate into OUT/sequences ([] when the
+    experiment names a folder of sequences)."""
     seqs = exp["sequences"]
     if isinstance(seqs, str):
-        return seqs
+        return []
     from . import sequences as sq
     cond = seqs["conditions"] or None
     if seqs["preset"] == "paper":
-        specs = sq.paper_specs(cond)
-    else:
-        frames, laps = (seqs["frames"], 0) if seqs["frames"] else (0, seqs["laps"] or 1)
-        specs = [sq.Spec(m, s, frames=frames, laps=laps, conditions=cond) for m in seqs["maps"]
-                 for s in seqs["speeds"]]
-    root = os.path.join(out_dir, "sequences")
-    say("generating %d sequence(s) into %s (complete ones are kept)" % (len(specs), root))
-    sq.generate(specs, root, jobs=min(jobs, len(specs)), log=say)
-    return root
+        return sq.paper_specs(cond)
+    frames, laps = (seqs["frames"], 0) if seqs["frames"] else (0, seqs["laps"] or 1)
+    return [sq.Spec(m, s, frames=frames, laps=laps, conditions=cond) for m in seqs["maps"] for s in seqs["speeds"]]
+
+
+def sequences_root(exp, out_dir):
+    return exp["sequences"] if isinstance(exp["sequences"], str) else os.path.join(out_dir, "sequences")
 
 
 def list_sequences(root):
@@ -92,7 +89,8 @@ def track_sequence(spec, seq_dir, result_path):
     return len(images), sum(times[1:]), ""
 
 
-def _job(args):
+def score_one(args):
+    """One (tracker, sequence) of score_work: (..., frames, seconds, error, skipped, wall)."""
     spec, tracker_name, seq, seq_dir, result_path = args
     t0 = time.monotonic()
     if os.path.exists(result_path):
@@ -114,26 +112,24 @@ def _read_times(result_path):
         return 0, math.nan
 
 
-def run_offline(exp, out_dir, jobs, progress_class):
+def score_work(exp, root, out_dir, seqs):
+    """(tracker, folder name, sequence, sequence folder, result file) for every tracker x sequence."""
+    from .experiment import sanitise
+    results_dir = os.path.join(out_dir, "results")
+    return [(spec, sanitise(spec), seq, os.path.join(root, seq), os.path.join(results_dir, sanitise(spec), seq + ".txt"))
+            for spec in exp["trackers"] for seq in seqs]
+
+
+def score_record(spec, name, seq, frames, seconds, error):
+    return {"kind": "offline", "tracker": spec, "tracker_dir": name, "sequence": seq, "frames": frames,
+            "tracker_fps": (frames - 1) / seconds if seconds and frames > 1 else math.nan, "error": error}
+
+
+def write_ope(exp, out_dir, root, say):
+    """Scores whatever results there are (sim4cv.ope) into OUT/ope; the report."""
     from . import ope
     from .experiment import sanitise
-    say = lambda text: print("sim4cv.experiment: %s" % text, file=__import__("sys").stderr, flush=True)  # noqa: E731
-    root = sequences_dir(exp, out_dir, jobs, say)
-    seqs = list_sequences(root)
-    if not seqs:
-        raise SystemExit("sim4cv.experiment: error: no sequences (folders with groundtruth_rect.txt) in %s" % root)
     results_dir = os.path.join(out_dir, "results")
-    work = [(spec, sanitise(spec), seq, os.path.join(root, seq),
-             os.path.join(results_dir, sanitise(spec), seq + ".txt")) for spec in exp["trackers"] for seq in seqs]
-    progress = progress_class(len(work), jobs, "(tracker, sequence) pairs")
-    records = []
-    context = multiprocessing.get_context("spawn")
-    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        for spec, name, seq, frames, seconds, error, skipped, wall in pool.map(_job, work):
-            progress.step("%s on %s" % (spec, seq), skipped, wall, " (error: %s)" % error if error else "")
-            records.append({"kind": "offline", "tracker": spec, "tracker_dir": name, "sequence": seq,
-                            "frames": frames, "tracker_fps": (frames - 1) / seconds if seconds and frames > 1
-                            else math.nan, "error": error})
     ope_dir = os.path.join(out_dir, "ope")
     os.makedirs(ope_dir, exist_ok=True)
     names = [sanitise(t) for t in exp["trackers"] if os.path.isdir(os.path.join(results_dir, sanitise(t)))]
@@ -149,4 +145,4 @@ def run_offline(exp, out_dir, jobs, progress_class):
         json.dump(report, f, indent=1, allow_nan=False)
     for w in report["warnings"]:
         say("ope warning: %s" % w)
-    return records, report
+    return report
