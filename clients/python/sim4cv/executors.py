@@ -118,7 +118,8 @@ def _script(path, lines, command):
     return path
 
 
-def submit_slurm(out_dir, jobs, partition=None, time_limit=None, cpus_per_task=1, sbatch_lines=(), command_text=""):
+def submit_slurm(out_dir, jobs, partition=None, time_limit=None, cpus_per_task=1, sbatch_lines=(), command_text="",
+                 say=print):
     """One sbatch --array per phase of the unfinished tasks (at most `jobs`
     running at once) and a gather job after them; the job ids."""
     out_dir = os.path.abspath(out_dir)
@@ -132,11 +133,12 @@ def submit_slurm(out_dir, jobs, partition=None, time_limit=None, cpus_per_task=1
                      run_one_argv(out_dir, cpus=cpus_per_task))
     ids, after = [], None
     for phase, indices in phases.items():
-        args = common + ["--job-name=%s-%d" % (name, phase), "--array=%s%%%d" % (array_spec(indices), jobs),
-                         "--output=" + os.path.join(logs, "task_%a_job%A.out")]
+        array = "--array=%s%%%d" % (array_spec(indices), jobs)
+        args = common + ["--job-name=%s-%d" % (name, phase), array, "--output=" + os.path.join(logs, "task_%a_job%A.out")]
         args += ["--dependency=afterany:" + after] if after else []
         after = _sbatch(args, script)
         ids.append(after)
+        say("sbatch %s: job %s" % (array, after))
     gather = _script(os.path.join(out_dir, "slurm", "gather.sh"), list(sbatch_lines),
                      [sys.executable, "-m", "sim4cv.experiment", "gather", out_dir] +
                      (["--command", command_text] if command_text else []))

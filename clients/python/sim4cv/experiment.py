@@ -386,7 +386,7 @@ def _execute(args, exp, command):
     say = lambda text: print("sim4cv.experiment: %s" % text, file=sys.stderr, flush=True)  # noqa: E731
     if args.executor == "slurm":
         ids = executors.submit_slurm(args.out, args.jobs, args.partition, args.time, args.cpus_per_task,
-                                     args.sbatch_line, command)
+                                     args.sbatch_line, command, say)
         say("submitted Slurm jobs %s (tasks, then gather); `python3 -m sim4cv.experiment status %s`"
             % (", ".join(ids), args.out))
         if not args.wait:

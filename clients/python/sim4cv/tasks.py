@@ -175,10 +175,20 @@ class TaskEnvironment:
             os.environ.setdefault("LP_NUM_THREADS", str(cpus))
         self.tmp = tempfile.mkdtemp(prefix="sim4cv-task-%s-" % self.tag)
         os.environ.update(SIM4CV_TASK=self.tag, TMPDIR=self.tmp)
+        # removes the folder when this process dies, kill -9 included (it gets SIGTERM then)
+        import subprocess
+        from .daemon import die_with_parent
+        self.cleaner = subprocess.Popen([sys.executable, "-c", _CLEANER, self.tmp], stdin=subprocess.DEVNULL,
+                                        preexec_fn=lambda: die_with_parent(15))
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
-        import shutil
-        shutil.rmtree(self.tmp, ignore_errors=True)
+        self.cleaner.terminate()
+        self.cleaner.wait()
+
+
+_CLEANER = """import shutil, signal, sys
+signal.signal(signal.SIGTERM, lambda *a: (shutil.rmtree(sys.argv[1], ignore_errors=True), sys.exit(0)))
+signal.pause()"""

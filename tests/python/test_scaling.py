@@ -1,0 +1,197 @@
+"""Studies as tasks on real schedulers (docs/scaling.md): a one-machine Slurm
+cluster (tests/python/local_slurm.py), a Dask LocalCluster and dask-scheduler
++ dask-worker processes each run tests/python/scaling_sweep.yaml; one task is
+killed and resubmitted; the gathered results equal the local executor's
+(lockstep runs are deterministic: the per-frame CSVs are byte-identical but
+for the tracker's measured update_ms). And a task killed with kill -9 leaves
+no process and no shared-memory file behind. Needs build/server/daemon/sim4cvd."""
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+SWEEP = os.path.join(REPO_ROOT, "tests", "python", "scaling_sweep.yaml")
+ENV = dict(os.environ, PYTHONPATH=os.path.join(REPO_ROOT, "clients", "python"))
+DETERMINISTIC = ("run", "tracker", "speed", "completion", "frames_processed", "frames_skipped",
+                 "mean_center_error_px", "median_center_error_px", "mean_distance_m", "lost", "error",
+                 "deviation_from_gt_m")
+
+
+def cli(*args, env=None, timeout=240):
+    return subprocess.run([sys.executable, "-m", "sim4cv.experiment"] + [str(a) for a in args], cwd=REPO_ROOT,
+                          env=env or ENV, capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    out = tmp_path_factory.mktemp("local") / "sweep"
+    proc = cli("run", SWEEP, "--out", out, "--jobs", "2")
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
+def frames(out):
+    """{run/frames_k.csv: rows without the measured update_ms}"""
+    tables = {}
+    for run in sorted(os.listdir(out / "runs")):
+        for name in sorted(os.listdir(out / "runs" / run)):
+            if name.startswith("frames_"):
+                with open(out / "runs" / run / name) as f:
+                    tables[run + "/" + name] = [{k: v for k, v in row.items() if k != "update_ms"}
+                                                for row in csv.DictReader(f)]
+    return tables
+
+
+def assert_same_results(out, reference):
+    assert frames(out) == frames(reference)
+    assert len(frames(out)) == 4 and all(len(rows) > 100 for rows in frames(out).values())
+    pick = lambda path: [{k: r[k] for k in DETERMINISTIC} for r in json.loads((path / "results.json").read_text())]
+    assert pick(out) == pick(reference)
+    assert "Tasks not done" not in (out / "report.md").read_text()
+
+
+def task_processes(out_dir):
+    """PIDs of `run-one OUT_DIR` processes."""
+    pids = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open("/proc/%s/cmdline" % pid, "rb") as f:
+                argv = f.read().split(b"\0")
+        except OSError:
+            continue
+        if b"run-one" in argv and str(out_dir).encode() in argv:
+            pids.append(int(pid))
+    return pids
+
+
+def marked_processes(marker):
+    """PIDs whose environment holds SIM4CV_TASK=<marker...>."""
+    found = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open("/proc/%s/environ" % pid, "rb") as f:
+                if ("SIM4CV_TASK=" + marker).encode() in f.read():
+                    found.append(int(pid))
+        except OSError:
+            continue
+    return found
+
+
+def comm(pid):
+    try:
+        with open("/proc/%d/comm" % pid) as f:
+            return f.read().strip()
+    except OSError:
+        return ""
+
+
+def wait_for(predicate, timeout=120, what="condition"):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.2)
+    raise AssertionError("timed out waiting for " + what)
+
+
+def test_kill9_task_leaves_nothing(tmp_path):
+    out = tmp_path / "killed"
+    assert cli("plan", SWEEP, "--out", out).returncode == 0
+    shm_before = set(os.listdir("/dev/shm"))
+    task = subprocess.Popen([sys.executable, "-m", "sim4cv.experiment", "run-one", str(out), "--index", "1"],
+                            cwd=REPO_ROOT, env=ENV, stderr=subprocess.PIPE)
+    marker = "local-1-%d" % task.pid
+    wait_for(lambda: os.path.exists(out / "runs" / os.listdir(out / "runs")[0] / "frames_0.csv")
+             if os.path.isdir(out / "runs") and os.listdir(out / "runs") else False, what="the run's first frames")
+    alive = marked_processes(marker)
+    names = {comm(p) for p in alive}
+    assert "sim4cvd" in names, names  # the task's daemon is up, mid-run
+    shm_during = set(os.listdir("/dev/shm")) - shm_before
+    task.send_signal(signal.SIGKILL)
+    task.wait()
+    wait_for(lambda: not marked_processes(marker), timeout=60, what="the task's processes to end")
+    leftovers = [n for n in shm_during & set(os.listdir("/dev/shm")) if n.startswith("sem.mp") or marker in n]
+    assert not leftovers, leftovers
+    assert not [d for d in os.listdir("/tmp") if d.startswith("sim4cv-task-" + marker)]
+    status = cli("status", out)
+    assert status.returncode == 1 and "missing 1 " in status.stdout, status.stdout
+
+
+def test_slurm_sweep_kill_resubmit_gather(tmp_path, reference):
+    from local_slurm import LocalSlurm
+    out = tmp_path / "slurm"
+    with LocalSlurm(cpus=2) as slurm:
+        env = dict(ENV, SLURM_CONF=slurm.env["SLURM_CONF"], PATH=slurm.env["PATH"])
+        proc = cli("run", SWEEP, "--executor", "slurm", "--jobs", "2", "--out", out, env=env)
+        assert proc.returncode == 0 and "submitted Slurm jobs" in proc.stderr, proc.stderr
+        array_job = proc.stderr.split("submitted Slurm jobs ")[1].split(",")[0]
+        # kill task 0 mid-run: its daemon (marked <array job>-<index>-<pid>) is up
+        wait_for(lambda: [p for p in marked_processes("%s-0-" % array_job) if comm(p) == "sim4cvd"],
+                 what="task 0's daemon")
+        subprocess.run(["scancel", "--signal=KILL", "%s_0" % array_job], env=env, check=True)
+        wait_for(lambda: not subprocess.run(["squeue", "-h"], env=env, capture_output=True, text=True).stdout.strip(),
+                 what="the array and the gather job")
+        status = cli("status", out, env=env)
+        assert status.returncode == 1 and "3 done, 0 failed, 1 missing" in status.stdout, status.stdout
+        assert "missing 0 easy_urban_s6_lockstep" in status.stdout
+        report = (out / "report.md").read_text()  # the gather job ran after the array
+        assert "Tasks not done (1 of 4" in report and "- 0 easy_urban_s6" in report
+        again = cli("resubmit", out, "--executor", "slurm", "--jobs", "2", "--wait", env=env)
+        assert again.returncode == 0, again.stderr + again.stdout
+        with open(out / "slurm" / "task.sh") as f:
+            assert "run-one" in f.read()
+        assert "--array=0%2" in again.stderr, again.stderr  # only the missing task
+    assert cli("status", out).stdout.startswith("4 tasks: 4 done")
+    assert_same_results(out, reference)
+
+
+def test_dask_local_cluster_kill_resubmit(tmp_path, reference):
+    out = tmp_path / "dask"
+    run = subprocess.Popen([sys.executable, "-m", "sim4cv.experiment", "run", SWEEP, "--executor", "dask", "--jobs",
+                            "2", "--retries", "0", "--out", str(out)], cwd=REPO_ROOT, env=ENV, stderr=subprocess.PIPE,
+                           text=True)
+    victim = wait_for(lambda: task_processes(out), what="a run-one process")[0]
+    time.sleep(1.0)  # mid-run
+    os.kill(victim, signal.SIGKILL)
+    _, err = run.communicate(timeout=240)
+    assert run.returncode == 1 and "failed" in err, err  # no retries: one task is not done
+    status = cli("status", out)
+    assert "3 done" in status.stdout and "1 missing" in status.stdout, status.stdout
+    again = cli("resubmit", out, "--executor", "dask", "--jobs", "2")
+    assert again.returncode == 0 and again.stderr.count(" done") >= 1, again.stderr
+    assert_same_results(out, reference)
+
+
+def test_dask_scheduler_and_workers(tmp_path, reference):
+    out = tmp_path / "dask_procs"
+    port = __import__("local_slurm").free_port()
+    procs = [subprocess.Popen(["dask-scheduler", "--host", "127.0.0.1", "--port", str(port), "--dashboard-address",
+                               ":0"], env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        for _ in range(2):
+            procs.append(subprocess.Popen(["dask-worker", "tcp://127.0.0.1:%d" % port, "--nthreads", "1",
+                                           "--no-dashboard"], env=ENV, stdout=subprocess.DEVNULL,
+                                          stderr=subprocess.DEVNULL))
+        proc = cli("run", SWEEP, "--executor", "dask", "--scheduler", "tcp://127.0.0.1:%d" % port, "--out", out)
+        assert proc.returncode == 0, proc.stderr
+    finally:
+        for p in procs:
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+    assert_same_results(out, reference)
