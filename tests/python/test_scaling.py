@@ -105,7 +105,7 @@ def wait_for(predicate, timeout=120, what="condition"):
     raise AssertionError("timed out waiting for " + what)
 
 
-def test_kill9_task_leaves_nothing(tmp_path):
+def test_task_killed_with_kill9_leaves_nothing(tmp_path):
     out = tmp_path / "killed"
     assert cli("plan", SWEEP, "--out", out).returncode == 0
     shm_before = set(os.listdir("/dev/shm"))
@@ -126,6 +126,23 @@ def test_kill9_task_leaves_nothing(tmp_path):
     assert not [d for d in os.listdir("/tmp") if d.startswith("sim4cv-task-" + marker)]
     status = cli("status", out)
     assert status.returncode == 1 and "missing 1 " in status.stdout, status.stdout
+
+
+@pytest.mark.parametrize("cpus, slurm_cpus, threads", [("3", "", 3), ("", "1", 1)])
+def test_task_llvmpipe_threads_follow_allocation(cpus, slurm_cpus, threads):
+    """Mesa's llvmpipe starts LP_NUM_THREADS render threads (llvmpipe-N), set
+    from run-one's --cpus or Slurm's SLURM_CPUS_PER_TASK."""
+    code = ("import glob, os, sim4cv; from sim4cv.tasks import TaskEnvironment; from sim4cv.daemon import OwnDaemon\n"
+            "with TaskEnvironment(0, %r or None), OwnDaemon(['--map', 'scenes/tracking/easy_urban.map']) as d:\n"
+            "    sim4cv.connect(d.address).close()\n"
+            "    names = [open(t + '/comm').read() for t in glob.glob('/proc/%%d/task/*' %% d.proc.pid)]\n"
+            "    print(sum(n.startswith('llvmpipe-') for n in names))" % cpus)
+    env = {k: v for k, v in ENV.items() if k not in ("LP_NUM_THREADS", "SLURM_CPUS_PER_TASK")}
+    env.update({"SLURM_CPUS_PER_TASK": slurm_cpus} if slurm_cpus else {})
+    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == [str(threads)]
 
 
 def test_slurm_sweep_kill_resubmit_gather(tmp_path, reference):
@@ -195,3 +212,20 @@ def test_dask_scheduler_and_workers(tmp_path, reference):
                 p.kill()
                 p.wait()
     assert_same_results(out, reference)
+
+
+def test_task_index_from_scheduler_variables(tmp_path):
+    out = tmp_path / "plan"
+    planned = cli("plan", SWEEP, "--out", out)
+    assert planned.returncode == 0 and "4 tasks in" in planned.stdout, planned.stderr
+    bare = {k: v for k, v in ENV.items() if k not in ("SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX", "SGE_TASK_ID",
+                                                      "PBS_ARRAY_INDEX")}
+    proc = cli("run-one", out, env=bare)
+    assert proc.returncode == 2 and "no --index and none of SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX" in proc.stderr
+    for name in ("SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX", "SGE_TASK_ID", "PBS_ARRAY_INDEX"):
+        proc = cli("run-one", out, env=dict(bare, **{name: "7"}))
+        assert proc.returncode == 2 and "task index 7 outside 0-3" in proc.stderr, (name, proc.stderr)
+    other = tmp_path / "other.yaml"
+    other.write_text(open(SWEEP).read().replace("speeds: [6, 8]", "speeds: [6]"))
+    proc = cli("plan", other, "--out", out)
+    assert proc.returncode == 2 and "holds another experiment (scaling_sweep); use a new --out" in proc.stderr
