@@ -69,12 +69,7 @@ def plan(exp, out_dir):
     return tasks
 
 
-def read_json(path):
-    try:
-        with open(path) as f:
-            return json.load(f)
-    except (OSError, ValueError):
-        return None
+read_json = ex._read_session  # a JSON file's content, or None when it is missing or cut short
 
 
 def load_plan(out_dir):
