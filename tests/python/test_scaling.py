@@ -169,6 +169,8 @@ def test_slurm_sweep_kill_resubmit_gather(tmp_path, reference):
         with open(out / "slurm" / "task.sh") as f:
             assert "run-one" in f.read()
         assert "--array=0%2" in again.stderr, again.stderr  # only the missing task
+        # the killed task's temporary folder went with its process group; the next task on the node removed it
+        assert not [d for d in os.listdir("/tmp") if d.startswith("sim4cv-task-%s-0-" % array_job)]
     assert cli("status", out).stdout.startswith("4 tasks: 4 done")
     assert_same_results(out, reference)
 

@@ -168,6 +168,7 @@ class TaskEnvironment:
         cpus = cpus or os.environ.get("SLURM_CPUS_PER_TASK", "")
         if str(cpus).isdigit() and int(cpus) > 0:
             os.environ.setdefault("LP_NUM_THREADS", str(cpus))
+        _remove_stale_folders(tempfile.gettempdir())
         self.tmp = tempfile.mkdtemp(prefix="sim4cv-task-%s-" % self.tag)
         os.environ.update(SIM4CV_TASK=self.tag, TMPDIR=self.tmp)
         # removes the folder when this process dies, kill -9 included (it gets SIGTERM then)
@@ -180,8 +181,22 @@ class TaskEnvironment:
         return self
 
     def __exit__(self, *exc):
+        import shutil
         self.cleaner.terminate()
         self.cleaner.wait()
+        shutil.rmtree(self.tmp, ignore_errors=True)  # also when the cleaner was killed before its handler was set
+
+
+def _remove_stale_folders(parent):
+    """Removes sim4cv-task-<job>-<index>-<pid>-* folders whose process is gone
+    (a task killed with its whole process group, e.g. by Slurm, leaves its
+    folder: the next task on the node removes it)."""
+    import glob
+    import shutil
+    for path in glob.glob(os.path.join(parent, "sim4cv-task-*-*-*-*")):
+        pid = os.path.basename(path).split("-")[-2]
+        if pid.isdigit() and not os.path.exists("/proc/%s" % pid):
+            shutil.rmtree(path, ignore_errors=True)
 
 
 _CLEANER = """import shutil, signal, sys
