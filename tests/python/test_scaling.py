@@ -231,3 +231,30 @@ def test_task_index_from_scheduler_variables(tmp_path):
     other.write_text(open(SWEEP).read().replace("speeds: [6, 8]", "speeds: [6]"))
     proc = cli("plan", other, "--out", out)
     assert proc.returncode == 2 and "holds another experiment (scaling_sweep); use a new --out" in proc.stderr
+
+
+def test_task_commands_plan_run_resubmit(tmp_path):
+    """A file of commands (how the driving splits run per map) as tasks: the
+    failing one is reported with its exit status and last line, and
+    resubmit runs it alone once it can succeed."""
+    flag = tmp_path / "ready"
+    write = "/usr/bin/python3 -c \"import sys; open(sys.argv[1], 'w').write(sys.argv[2])\" %s %s"
+    needs_flag = ("/usr/bin/python3 -c \"import os, sys; os.path.exists(sys.argv[1]) or sys.exit('no flag yet'); "
+                  "open(sys.argv[2], 'w').write('c')\" %s %s" % (flag, tmp_path / "c.txt"))
+    commands = tmp_path / "commands.txt"
+    commands.write_text("# one line per task\n%s\n%s\n\n%s\n" % (write % (tmp_path / "a.txt", "a"), needs_flag,
+                                                                write % (tmp_path / "b.txt", "b")))
+    out = tmp_path / "tasks"
+    assert cli("plan-commands", commands, "--out", out).stdout.startswith("3 tasks in")
+    first = cli("resubmit", out, "--jobs", "2")
+    assert first.returncode == 1, first.stderr
+    status = cli("status", out)
+    assert "3 tasks: 2 done, 1 failed, 0 missing" in status.stdout
+    assert "failed 1 " in status.stdout and "exit status 1" in status.stdout and "no flag yet" in status.stdout
+    assert "failed: exit status 1" in (out / "report.md").read_text()
+    flag.write_text("")
+    os.remove(tmp_path / "a.txt")  # done tasks are not run again
+    again = cli("resubmit", out, "--jobs", "2")
+    assert again.returncode == 0, again.stderr
+    assert not (tmp_path / "a.txt").exists() and (tmp_path / "c.txt").read_text() == "c"
+    assert "3 done" in (out / "report.md").read_text()

@@ -60,7 +60,8 @@ def run_local(out_dir, jobs, daemon=None, progress_class=None):
     env = child_environment()
     for phase in sorted({t["phase"] for t in tasks}):
         todo = [t for t in tasks if t["phase"] == phase]
-        label = {"online": "runs", "sequence": "sequences to generate", "score": "(tracker, sequence) pairs"}
+        label = {"online": "runs", "sequence": "sequences to generate", "score": "(tracker, sequence) pairs",
+                 "command": "commands"}
         progress = (progress_class or Progress)(len(todo), jobs, label[todo[0]["kind"]])
 
         def one(task):

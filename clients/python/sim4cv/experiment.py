@@ -337,6 +337,10 @@ def _parser():
     for q in (r, pl):
         q.add_argument("file", help="experiment YAML")
         q.add_argument("--out", required=True, help="output folder (created; reused to resume)")
+    pc = sub.add_parser("plan-commands", help="write DIR/tasks.json: one task per line of a file of commands "
+                                              "(e.g. driving generate per map, driving evaluate per model and map)")
+    pc.add_argument("file", help="one command line per line; # comments")
+    pc.add_argument("--out", required=True, help="the task folder")
     rs = sub.add_parser("resubmit", help="run the failed and missing tasks of a planned DIR again")
     rs.add_argument("out", help="the planned folder")
     for q in (r, rs):
@@ -433,6 +437,10 @@ def main(argv=None):
                 print("%d tasks in %s" % (len(planned), os.path.join(os.path.abspath(args.out), tasks.PLAN)))
                 return 0
             return _execute(args, exp, command)
+        if args.command == "plan-commands":
+            planned = tasks.plan_commands(args.file, args.out)
+            print("%d tasks in %s" % (len(planned), os.path.join(os.path.abspath(args.out), tasks.PLAN)))
+            return 0
         if args.command == "resubmit":
             exp, _ = tasks.load_plan(args.out)
             _check(exp, args)

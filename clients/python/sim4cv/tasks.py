@@ -72,6 +72,35 @@ def plan(exp, out_dir):
 read_json = ex._read_session  # a JSON file's content, or None when it is missing or cut short
 
 
+def plan_commands(path, out_dir):
+    """A task per line of `path` (a shell-free command line; # comments and
+    blank lines skipped), run in the current folder: how the driving splits
+    (driving generate per map, driving evaluate per model x map) and any
+    other per-item command become tasks. Done: exit status 0."""
+    import shlex
+    try:
+        with open(path) as f:
+            lines = [line.strip() for line in f if line.strip() and not line.lstrip().startswith("#")]
+    except OSError as e:
+        raise TaskError("%s: %s" % (path, e))
+    if not lines:
+        raise TaskError("%s: no commands (one per line)" % path)
+    try:
+        tasks = [{"kind": "command", "phase": 0, "name": line, "argv": shlex.split(line), "cwd": os.getcwd()}
+                 for line in lines]
+    except ValueError as e:
+        raise TaskError("%s: %s" % (path, e))
+    exp = {"kind": "commands", "name": os.path.splitext(os.path.basename(path))[0], "commands": lines}
+    for i, t in enumerate(tasks):
+        t["index"] = i
+    out_dir = os.path.abspath(out_dir)
+    old = read_json(os.path.join(out_dir, PLAN))
+    if old is not None and old.get("experiment") != exp:
+        raise TaskError("%s holds another plan (%s); use a new --out" % (out_dir, old["experiment"]["name"]))
+    write_atomic(os.path.join(out_dir, PLAN), {"experiment": exp, "out": out_dir, "tasks": tasks})
+    return tasks
+
+
 def load_plan(out_dir):
     data = read_json(os.path.join(out_dir, PLAN))
     if data is None:
@@ -91,6 +120,8 @@ def index_from_environment():
 def is_done(out_dir, task):
     if task["kind"] == "online":
         return ex._read_session(os.path.join(out_dir, "runs", task["name"], "session.json")) is not None
+    if task["kind"] == "command":
+        return os.path.exists(os.path.join(out_dir, "done", "%06d.json" % task["index"]))
     if task["kind"] == "sequence":
         from .sequences import Spec, is_complete
         return is_complete(os.path.join(out_dir, "sequences", task["name"]), Spec(**task["spec"]))
@@ -107,12 +138,35 @@ def _execute(out_dir, task, daemon):
     if task["kind"] == "online":
         _, summary, _ = ex._run_online(task["run"], out_dir, daemon)
         return "" if is_done(out_dir, task) else summary["results"][0].get("error", "run failed")
+    if task["kind"] == "command":
+        return _run_command(out_dir, task)
     if task["kind"] == "sequence":
         from . import sequences as sq
         sq.generate([sq.Spec(**task["spec"])], os.path.join(out_dir, "sequences"), log=say)
         return ""
     *_, error, _, _ = off.score_one(tuple(task["work"]))
     return error
+
+
+def _run_command(out_dir, task):
+    import subprocess
+    log = os.path.join(out_dir, "logs", "command_%06d.log" % task["index"])
+    os.makedirs(os.path.dirname(log), exist_ok=True)
+    t0 = time.monotonic()
+    with open(log, "w") as f:
+        try:
+            rc = subprocess.run(task["argv"], cwd=task["cwd"], stdin=subprocess.DEVNULL, stdout=f,
+                                stderr=subprocess.STDOUT).returncode
+        except OSError as e:
+            return "%s: %s" % (task["argv"][0], e)
+    if rc != 0:
+        with open(log, errors="replace") as f:
+            last = [line.strip() for line in f if line.strip()][-1:] or [""]
+        return "exit status %d (%s): %s" % (rc, log, last[0])
+    write_atomic(os.path.join(out_dir, "done", "%06d.json" % task["index"]),
+                 {"index": task["index"], "command": task["name"], "wall_s": time.monotonic() - t0,
+                  "host": socket.gethostname()})
+    return ""
 
 
 def run_one(out_dir, index, daemon=None):

@@ -45,6 +45,21 @@ def _offline_records(exp, out_dir, st, say):
     return records, report
 
 
+def _command_report(out_dir, st, command):
+    """A plan of commands has no tables of its own: report.md lists each
+    command's state (its outputs are wherever the command wrote them)."""
+    lines = ["# Commands (%d: %d done, %d failed, %d missing)" % (len(st["tasks"]), len(st["done"]),
+                                                                   len(st["failed"]), len(st["missing"])),
+             "", "- command: `%s`" % command, ""]
+    for t in st["tasks"]:
+        i = t["index"]
+        state = "done" if i in st["done"] else ("failed: " + st["failed"][i]) if i in st["failed"] else "missing"
+        lines.append("- %d `%s`: %s" % (i, t["name"], state))
+    with open(os.path.join(out_dir, "report.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return [], ["report.md"], st
+
+
 def gather(out_dir, command, wall_s=None):
     """Writes the study's outputs from what is done; returns (records, written files, status)."""
     from . import experiment_report as report
@@ -53,6 +68,8 @@ def gather(out_dir, command, wall_s=None):
     out_dir = os.path.abspath(out_dir)
     exp, _ = tk.load_plan(out_dir)
     st = tk.status(out_dir)
+    if exp["kind"] == "commands":
+        return _command_report(out_dir, st, command)
     if exp["kind"] == "online":
         records, ope_report = _online_records(out_dir, st), None
     else:
