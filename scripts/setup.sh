@@ -17,6 +17,7 @@ PACKAGES=(
   python3-venv dpkg-dev  # the install test: a fresh venv for the wheel, dpkg-shlibdeps for cpack -G DEB
   clang libclang-rt-14-dev  # the fuzz build (scripts/fuzz.sh): clang and its libFuzzer/sanitizer runtimes
   chromium python3-websocket  # the studio's browser tests (tests/studio, tools/cdp_driver.py): headless Chromium over DevTools
+  slurmctld slurmd slurm-client munge python3-distributed  # tests/python/test_scaling.py: a one-machine Slurm cluster and Dask (docs/scaling.md)
 )
 
 missing=()

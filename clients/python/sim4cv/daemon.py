@@ -83,6 +83,17 @@ def parse_listening_line(line: str) -> Optional[Dict[str, str]]:
     return dict(field.split("=", 1) for field in line[len(LISTENING_PREFIX):].split() if "=" in field)
 
 
+def die_with_parent(signal_number: int = 9) -> None:
+    """In the forked child before exec: `signal_number` when the thread that started
+    it dies, so a task killed with kill -9 (a scheduler's timeout) leaves no
+    daemon behind (Linux prctl PR_SET_PDEATHSIG; elsewhere nothing)."""
+    import ctypes
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal_number, 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
 class OwnDaemon:
     """A sim4cvd of our own: --tcp-port 0 and --mode `mode` plus `args`;
     stdout and stderr are drained by threads (the daemon never blocks on a
@@ -98,7 +109,7 @@ class OwnDaemon:
             time.sleep(1.0)
         self.args: List[str] = [path, "--tcp-port", "0", "--mode", mode] + list(args)
         self.proc = subprocess.Popen(self.args, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE)
+                                     stderr=subprocess.PIPE, preexec_fn=die_with_parent)
         self._lines: "queue.Queue[Optional[str]]" = queue.Queue()
         self.stderr_tail: List[str] = []
         threading.Thread(target=self._drain, args=(self.proc.stdout, True), daemon=True).start()

@@ -12,33 +12,30 @@ reference: AUC and precision at their best). A result file is written last,
 by renaming, so one that exists is complete and is skipped on resume.
 """
 
-import concurrent.futures
 import glob
 import math
-import multiprocessing
 import os
 import time
 
 import numpy as np
 
 
-def sequences_dir(exp, out_dir, jobs, say):
-    """The folder of sequences: the given one, or generated into OUT/sequences."""
+def generation_specs(exp):
+    """The sim4cv.sequences Specs to generate into OUT/sequences ([] when the
+    experiment names a folder of sequences)."""
     seqs = exp["sequences"]
     if isinstance(seqs, str):
-        return seqs
+        return []
     from . import sequences as sq
     cond = seqs["conditions"] or None
     if seqs["preset"] == "paper":
-        specs = sq.paper_specs(cond)
-    else:
-        frames, laps = (seqs["frames"], 0) if seqs["frames"] else (0, seqs["laps"] or 1)
-        specs = [sq.Spec(m, s, frames=frames, laps=laps, conditions=cond) for m in seqs["maps"]
-                 for s in seqs["speeds"]]
-    root = os.path.join(out_dir, "sequences")
-    say("generating %d sequence(s) into %s (complete ones are kept)" % (len(specs), root))
-    sq.generate(specs, root, jobs=min(jobs, len(specs)), log=say)
-    return root
+        return sq.paper_specs(cond)
+    frames, laps = (seqs["frames"], 0) if seqs["frames"] else (0, seqs["laps"] or 1)
+    return [sq.Spec(m, s, frames=frames, laps=laps, conditions=cond) for m in seqs["maps"] for s in seqs["speeds"]]
+
+
+def sequences_root(exp, out_dir):
+    return exp["sequences"] if isinstance(exp["sequences"], str) else os.path.join(out_dir, "sequences")
 
 
 # Run in every offline study beside the trackers asked for: the ceiling (gt) and
@@ -101,7 +98,18 @@ def track_sequence(spec, seq_dir, result_path):
     return len(images), sum(times[1:]), ""
 
 
-def _job(args):
+def _fps_per_frame(base):
+    """got10k's speed: the mean of 1/t over the lines of <seq>_time.txt with t > 0 (the init line included)."""
+    from .sequence_export import per_frame_fps
+    try:
+        with open(base + "_time.txt") as f:
+            return per_frame_fps([float(line) for line in f if line.strip()])
+    except (OSError, ValueError):
+        return math.nan
+
+
+def score_one(args):
+    """One (tracker, sequence) of score_work: (..., frames, seconds, error, skipped, wall)."""
     spec, tracker_name, seq, seq_dir, result_path = args
     t0 = time.monotonic()
     if os.path.exists(result_path):
@@ -114,16 +122,6 @@ def _job(args):
     return spec, tracker_name, seq, frames, seconds, error, False, time.monotonic() - t0
 
 
-def _fps_per_frame(base):
-    """got10k's speed: the mean of 1/t over the lines of <seq>_time.txt with t > 0 (the init line included)."""
-    from .sequence_export import per_frame_fps
-    try:
-        with open(base + "_time.txt") as f:
-            return per_frame_fps([float(line) for line in f if line.strip()])
-    except (OSError, ValueError):
-        return math.nan
-
-
 def _read_times(result_path):
     try:
         with open(result_path[:-4] + "_time.txt") as f:
@@ -133,31 +131,30 @@ def _read_times(result_path):
         return 0, math.nan
 
 
-def run_offline(exp, out_dir, jobs, progress_class):
+def score_work(exp, root, out_dir, seqs):
+    """(tracker, folder name, sequence, sequence folder, result file) for every tracker x sequence."""
+    from .experiment import sanitise
+    results_dir = os.path.join(out_dir, "results")
+    return [(spec, sanitise(spec), seq, os.path.join(root, seq), os.path.join(results_dir, sanitise(spec), seq + ".txt"))
+            for spec in with_references(exp["trackers"]) for seq in seqs]
+
+
+def score_record(work, frames, seconds, error):
+    """The record of one score_work item: (tracker, folder name, sequence, sequence folder, result file)."""
+    spec, name, seq, _, result_path = work
+    return {"kind": "offline", "tracker": spec, "tracker_dir": name, "sequence": seq, "frames": frames,
+            "tracker_fps": (frames - 1) / seconds if seconds and frames > 1 else math.nan,
+            "fps_per_frame": _fps_per_frame(result_path[:-len(".txt")]), "error": error}
+
+
+def write_ope(exp, out_dir, root, say):
+    """Scores whatever results there are (sim4cv.ope) into OUT/ope; the report."""
     from . import ope
     from .experiment import sanitise
-    say = lambda text: print("sim4cv.experiment: %s" % text, file=__import__("sys").stderr, flush=True)  # noqa: E731
-    root = sequences_dir(exp, out_dir, jobs, say)
-    seqs = list_sequences(root)
-    if not seqs:
-        raise SystemExit("sim4cv.experiment: error: no sequences (folders with groundtruth_rect.txt) in %s" % root)
     results_dir = os.path.join(out_dir, "results")
-    trackers = with_references(exp["trackers"])
-    work = [(spec, sanitise(spec), seq, os.path.join(root, seq),
-             os.path.join(results_dir, sanitise(spec), seq + ".txt")) for spec in trackers for seq in seqs]
-    progress = progress_class(len(work), jobs, "(tracker, sequence) pairs")
-    records = []
-    context = multiprocessing.get_context("spawn")
-    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        for spec, name, seq, frames, seconds, error, skipped, wall in pool.map(_job, work):
-            progress.step("%s on %s" % (spec, seq), skipped, wall, " (error: %s)" % error if error else "")
-            records.append({"kind": "offline", "tracker": spec, "tracker_dir": name, "sequence": seq,
-                            "frames": frames, "tracker_fps": (frames - 1) / seconds if seconds and frames > 1
-                            else math.nan, "fps_per_frame": _fps_per_frame(os.path.join(results_dir, name, seq)),
-                            "error": error})
     ope_dir = os.path.join(out_dir, "ope")
     os.makedirs(ope_dir, exist_ok=True)
-    names = [sanitise(t) for t in trackers if os.path.isdir(os.path.join(results_dir, sanitise(t)))]
+    names = [sanitise(t) for t in with_references(exp["trackers"]) if os.path.isdir(os.path.join(results_dir, sanitise(t)))]
     report = ope.evaluate(root, results_dir, exp["convention"], trackers=names)
     try:
         from . import ope_plots
@@ -170,4 +167,4 @@ def run_offline(exp, out_dir, jobs, progress_class):
         json.dump(report, f, indent=1, allow_nan=False)
     for w in report["warnings"]:
         say("ope warning: %s" % w)
-    return records, report
+    return report
