@@ -68,3 +68,70 @@ def test_udp_client_refuses_lying_chunks_without_allocating():
     for (_, expected), got in zip(HOSTILE, problems):
         assert got.startswith(expected), (got, expected)
     assert peak < 16 << 20, "the client allocated %d bytes for forged chunks" % peak
+
+
+# A fake shared-memory daemon: listens on the abstract socket of --shm-name
+# NAME and answers the attach with `status` and the claimed sizes, passing
+# three small memfds.
+FAKE_SHM = r"""
+import os, socket, struct, sys
+sys.path.insert(0, sys.argv[1])
+from sim4cv import shm_layout as L
+server = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+server.bind(L.socket_address(sys.argv[2]))
+server.listen(1)
+print("ready", flush=True)
+peer, _ = server.accept()
+fds = [os.memfd_create("fake%d" % i) for i in range(3)]
+for fd in fds:
+    os.ftruncate(fd, 4096)
+message = struct.pack("<8sIIQQ224s", L.ATTACH_MAGIC, L.LAYOUT_VERSION, 0, 1 << 40, L.AREA_BYTES, b"")
+socket.send_fds(peer, [message], fds)
+peer.recv(1)
+"""
+
+
+def _fake_shm_daemon(name, user=None):
+    import os
+    import subprocess
+    import sys
+    package = os.path.dirname(os.path.dirname(os.path.abspath(sim4cv.__file__)))
+    fake = subprocess.Popen([sys.executable, "-c", FAKE_SHM, package, name], stdout=subprocess.PIPE, text=True,
+                            user=user)
+    assert fake.stdout.readline().strip() == "ready"
+    return fake
+
+
+def _attach_error(name):
+    try:
+        sim4cv.connect("shm://" + name, name="victim", timeout=5.0)
+    except (sim4cv.ConnectionClosed, sim4cv.ShmLayoutError) as e:
+        return str(e)
+    raise AssertionError("attached to a fake daemon")
+
+
+def test_shm_client_refuses_a_socket_of_another_user():
+    import os
+    import pytest
+    if os.getuid() != 0:
+        pytest.skip("needs root to run the fake daemon as user nobody")
+    name = "/hostile-owner-%d" % os.getpid()
+    fake = _fake_shm_daemon(name, user="nobody")
+    try:
+        message = _attach_error(name)
+    finally:
+        fake.kill()
+        fake.wait()
+    assert "belongs to process %d of uid 65534, not to this user (uid 0)" % fake.pid in message, message
+
+
+def test_shm_client_checks_claimed_sizes_before_mapping():
+    import os
+    name = "/hostile-size-%d" % os.getpid()
+    fake = _fake_shm_daemon(name)
+    try:
+        message = _attach_error(name)
+    finally:
+        fake.kill()
+        fake.wait()
+    assert "the frame object is said to be 1099511627776 bytes but its descriptor holds 4096" in message, message
