@@ -4,6 +4,7 @@
 // requests.
 
 import { headingOf } from "./world_map.js";
+import { option, setOptions } from "./dom.js";
 
 // SetConditions.preset's values (protocol/conditions.h).
 export const PRESETS = ["clear_noon", "clear_morning", "overcast", "fog", "dusk", "night", "rain"];
@@ -13,7 +14,7 @@ const $ = (id) => document.getElementById(id);
 export class Controls {
   constructor(app) {
     this.app = app;
-    $("preset").innerHTML = PRESETS.map((p) => `<option>${p}</option>`).join("");
+    setOptions($("preset"), PRESETS.map((p) => option(p)));
     $("load-map").onclick = () => this.run("LoadMap", { load_map: { name: $("map-name").value } }, true);
     $("apply-conditions").onclick = () => {
       const request = { preset: $("preset").value, quality: $("quality").value };
@@ -30,15 +31,15 @@ export class Controls {
   }
 
   setMaps(names) {
-    $("map-name").innerHTML = names.map((n) => `<option>${n}</option>`).join("");
+    setOptions($("map-name"), names.map((n) => option(n)));
   }
 
   // The world changed (or was fetched): entity list for mounts, conditions shown.
   setWorld(world) {
     const mount = $("camera-mount");
     const current = mount.value;
-    mount.innerHTML = `<option value="">(fixed in the world)</option>` +
-      (world.entities || []).map((e) => `<option value="${e.name}">${e.id} ${e.name}</option>`).join("");
+    setOptions(mount, [option("(fixed in the world)", ""),
+                       ...(world.entities || []).map((e) => option(`${e.id} ${e.name}`, e.name))], false);
     mount.value = current;
     const look = world.conditions || {};
     $("conditions-now").textContent = `${look.preset || "?"}, ${Number(look.hour || 0).toFixed(1)} h, ${look.quality || "?"}`;

@@ -12,6 +12,7 @@
 import { StudioSocket } from "./protocol.js";
 import { headingOf } from "./world_map.js";
 import { DriveScore, scoreRows, scoreTotals } from "./drive_score.js";
+import { option, setOptions } from "./dom.js";
 
 export const CONTROLS_HZ = 20;
 export const STEER_RATE = 2.5, CENTRE_RATE = 4.0;  // steering units per second
@@ -122,8 +123,8 @@ export class Driving {
   setWorld(world) {
     const menu = $("drive-car"), current = menu.value;
     const cars = (world.entities || []).filter((e) => e.kind === "ENTITY_KIND_CAR");
-    menu.innerHTML = cars.map((e) => `<option value="${e.id}">${e.id} ${e.name}</option>`).join("") ||
-      `<option value="">(no car: spawn one)</option>`;
+    setOptions(menu, cars.length ? cars.map((e) => option(`${e.id} ${e.name}`, e.id)) : [option("(no car: spawn one)", "")],
+               false);
     if (cars.some((e) => String(e.id) === current)) menu.value = current;
     // The map's routes: the score can follow one (QueryRoad.route) instead of the nearest lane.
     const routes = $("drive-route"), chosen = routes.value;

@@ -6,6 +6,7 @@
 // selected UAV follows an entity or holds where it is (CommandUav).
 
 import { headingOf } from "./world_map.js";
+import { option, setOptions } from "./dom.js";
 
 const $ = (id) => document.getElementById(id);
 const KIND_NAMES = { ENTITY_KIND_CAR: "car", ENTITY_KIND_UAV: "UAV", ENTITY_KIND_PEDESTRIAN: "pedestrian" };
@@ -15,7 +16,7 @@ export class EntityTools {
     this.app = app;
     this.spawning = false;  // the next click on the map spawns
     this.lastClick = null;  // world point of the last click on the map (not a drag)
-    $("spawn-kind").innerHTML = Object.entries(KIND_NAMES).map(([k, n]) => `<option value="${k}">${n}</option>`).join("");
+    setOptions($("spawn-kind"), Object.entries(KIND_NAMES).map(([k, n]) => option(n, k)));
     $("spawn-mode").onclick = () => this.setSpawning(!this.spawning);
     $("set-route").onclick = () => this.setRoute(false);
     $("set-speed").onclick = () => this.setRoute(true);
@@ -74,11 +75,9 @@ export class EntityTools {
 
   // The world's routes and entities in the menus (the choices kept).
   setWorld(world) {
-    const keep = (menu, html) => { const current = menu.value; menu.innerHTML = html; if (current) menu.value = current;
-                                   if (menu.selectedIndex < 0) menu.selectedIndex = 0; };
     const routes = world.routes || [];
-    keep($("route-name"), routes.map((r) => `<option>${r}</option>`).join("") || `<option value="">(no routes)</option>`);
-    keep($("uav-target"), (world.entities || []).map((e) => `<option value="${e.id}">${e.id} ${e.name}</option>`).join(""));
+    setOptions($("route-name"), routes.length ? routes.map((r) => option(r)) : [option("(no routes)", "")]);
+    setOptions($("uav-target"), (world.entities || []).map((e) => option(`${e.id} ${e.name}`, e.id)));
     this.routes = routes;
     this.select(this.selected);
   }

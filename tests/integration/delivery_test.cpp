@@ -159,8 +159,9 @@ TEST_F(DaemonTest, ClientThatStopsReadingDoesNotSlowOthers) {
             << ", longest wait " << wait_ms << " ms, worst latency " << worst_latency_ns / 1000000 << " ms\n";
   EXPECT_GE(produced, 30u) << "the simulation was held back";
   EXPECT_GE(2 * received, produced) << "the reader got under half the frames (" << dropped << " dropped)";
-  EXPECT_LT(wait_ms, 1000) << "the reader waited that long for a frame";
-  EXPECT_LT(worst_latency_ns, 1'000'000'000) << "a frame reached the reader that late";
+  // Margins that hold beside a parallel build: a held-back reader waits for the whole run.
+  EXPECT_LT(wait_ms, 5000) << "the reader waited that long for a frame";
+  EXPECT_LT(worst_latency_ns, 5'000'000'000) << "a frame reached the reader that late";
   // The stuck client really was stuck: once it reads again, its frames count
   // the ones its full socket made it miss.
   uint64_t stuck_dropped = 0;

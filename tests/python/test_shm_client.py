@@ -127,8 +127,8 @@ def test_daemon_stopping_mid_wait_raises_instead_of_hanging(start_transports_dae
     threading.Timer(0.3, daemon.proc.terminate).start()
     start = time.monotonic()
     with pytest.raises(sim4cv.ConnectionClosed, match="stopped|ended"):
-        client.receive_frame(timeout=10)
-    assert time.monotonic() - start < 3
+        client.receive_frame(timeout=120)
+    assert time.monotonic() - start < 60  # the daemon's end was noticed, not the 120 s timeout (margin for busy hosts)
     client.close()
 
 
@@ -140,8 +140,8 @@ def test_daemon_killed_mid_wait_raises_instead_of_hanging(tmp_path):
         threading.Timer(0.3, daemon.kill).start()
         start = time.monotonic()
         with pytest.raises(sim4cv.ConnectionClosed):
-            client.receive_frame(timeout=10)
-        assert time.monotonic() - start < 3
+            client.receive_frame(timeout=120)
+        assert time.monotonic() - start < 60  # the death was noticed, not the 120 s timeout
         client.close()
     finally:
         daemon.kill()

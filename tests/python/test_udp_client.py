@@ -98,13 +98,14 @@ def _chunks(frame_id, payload, size):
 
 def test_reassembly_in_any_order_and_dropping_incomplete_frames():
     r = FrameReassembler()
-    one, two, three = bytes(range(250)), bytes(100) + b"x" * 50, b"y" * 120
-    c1 = _chunks(1, one, 64)
+    # Chunks of 600 bytes: the daemon's smallest datagram (576) carries at least 533.
+    one, two, three = bytes(range(250)) * 8, bytes(1000) + b"x" * 100, b"y" * 1200
+    c1 = _chunks(1, one, 600)
     assert [r.add(c) for c in (c1[2], c1[0], c1[3])] == [None] * 3
     assert r.add(c1[0]) is None and r.stale == 1  # duplicate
     assert bytes(r.add(c1[1])) == one and r.completed == 1
     assert r.add(c1[1]) is None and r.stale == 2  # straggler of a finished frame
-    c2, c3 = _chunks(2, two, 64), _chunks(3, three, 64)
+    c2, c3 = _chunks(2, two, 600), _chunks(3, three, 600)
     assert r.add(c2[0]) is None
     assert r.add(c3[1]) is None and r.dropped == 1  # frame 3 overtook the incomplete frame 2
     assert r.add(c2[1]) is None and r.stale == 3

@@ -432,7 +432,7 @@ TEST_F(MapRenderTest, DensestUrbanMapRendersQuickly) {
               << " view: " << ms << " ms per frame\n";
     RecordProperty(name + "_ms_per_frame", std::to_string(ms));
     SavePng(frame, "/tmp/sim4cv_map_densest_" + name + "_320.png");
-    EXPECT_LT(ms, 250.0);  // generous: a sanity bound, not a benchmark
+    EXPECT_LT(ms, 2500.0);  // a sanity bound that holds beside a parallel build; bench/ measures the speed
   }
 }
 

@@ -87,6 +87,25 @@ class ShmFrame(Frame):
                      list(self.boxes), list(self.entities), images, None, self.camera)
 
 
+def _check_peer_is_us(sock, address):
+    """The abstract socket name is anyone's to take: attach only to a
+    process of our own user (SO_PEERCRED of the listening end), as the
+    daemon accepts only clients of its own user."""
+    pid, uid, _ = struct.unpack("3i", sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i")))
+    if uid != os.getuid():
+        raise ConnectionClosed("refusing to attach to %s: the socket @%s%s belongs to process %d of uid %d, "
+                               "not to this user (uid %d); another user may be impersonating sim4cvd"
+                               % (address, L.SOCKET_PREFIX, address.name, pid, uid, os.getuid()))
+
+
+def _check_mappable(fd, claimed, which, what):
+    """A size the peer claims is checked against the descriptor's real size
+    before mapping: touching pages past the end would kill us with SIGBUS."""
+    actual = os.fstat(fd).st_size
+    if claimed <= 0 or claimed > actual:
+        raise ShmLayoutError("%s: %s is said to be %d bytes but its descriptor holds %d" % (what, which, claimed, actual))
+
+
 class _Ring:
     """The mapped, validated frame object."""
 
@@ -176,7 +195,11 @@ class ShmClient(BaseClient):
         try:
             sock.settimeout(timeout)
             sock.connect(L.socket_address(self.address.name))
+            _check_peer_is_us(sock, self.address)
             message, fds, _, _ = socket.recv_fds(sock, L.ATTACH_BYTES, 3)
+        except ConnectionClosed:
+            sock.close()
+            raise
         except (OSError, socket.timeout) as e:
             sock.close()
             raise ConnectionClosed("cannot attach to sim4cvd at %s (shared memory, socket @%s%s): %s" % (
@@ -186,6 +209,8 @@ class ShmClient(BaseClient):
             if status != 0 or len(fds) != 3:
                 raise ConnectionClosed("sim4cvd at %s refused the shared-memory attachment: %s" % (
                     self.address, reason or "%d descriptors" % len(fds)))
+            _check_mappable(fds[0], frames_bytes, "the frame object", what)
+            _check_mappable(fds[1], area_bytes, "the client area", what)
             if self._ring is None:  # attached again: keep the mapping that frames may point into
                 self._ring = _Ring(fds[0], frames_bytes, what)
             if area_bytes < L.AREA_BYTES:

@@ -139,7 +139,7 @@ class UdpClient(BaseClient):
             if data is not None:
                 whole = pb.Envelope()
                 try:
-                    whole.ParseFromString(bytes(data))
+                    whole.ParseFromString(data)
                 except Exception:
                     self.malformed += 1
                     return True

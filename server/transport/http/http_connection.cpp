@@ -188,6 +188,12 @@ void HttpConnection::Respond(http::status status, std::string body, const std::s
   response_.set(http::field::cache_control, "no-store");  // a restarted daemon's page must not be stale
   response_.set("X-Content-Type-Options", "nosniff");
   if (!set_cookie_.empty()) response_.set(http::field::set_cookie, std::exchange(set_cookie_, {}));
+  // Script only from the studio's own files: a name a client gave an entity
+  // can never run as inline script or an event handler in the page.
+  response_.set("Content-Security-Policy",
+                "default-src 'self'; script-src 'self'; object-src 'none'; base-uri 'none'; "
+                "frame-ancestors 'none'; form-action 'none'; img-src 'self' data: blob:; "
+                "style-src 'self' 'unsafe-inline'");
   response_.keep_alive(keep_alive);
   response_.body() = std::move(body);
   response_.prepare_payload();
