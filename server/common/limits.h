@@ -112,6 +112,13 @@ inline constexpr uint32_t kMaxTrafficPedestrians = 2000;
 // per frame. Over it: INVALID_STATE (not fatal) with the request's id.
 inline constexpr uint32_t kMaxOutstandingConfigures = 4;
 
+// The sim thread's time for Configures between two frames: once the
+// Configures it carried out since it last drained the queue took this long,
+// the rest (and every command after them, so the order holds) waits until
+// after the next frame. Authoring requests (CheckMap, GenerateMap, SaveMap,
+// OpenMap, ListMaps) do not count: a worker thread answers them.
+inline constexpr uint32_t kConfigureBudgetPerFrameMs = 10;
+
 // Default of --max-message-bytes: the largest Envelope a client may send. The
 // largest legal request is a LoadMap carrying a map's text (at most
 // kMaxMapTextBytes); another MiB holds its Envelope with room to spare, and bounds what one message costs the TCP

@@ -51,6 +51,7 @@ SimThread::SimThread(const Config& config, std::shared_ptr<const sim::Scene> sce
   }
   PublishState();  // GetState before the first step sees frame 0
   PublishWorld();
+  authoring_ = std::make_unique<AuthoringWorker>(config_, directory_);
 }
 
 SimThread::~SimThread() {
@@ -110,6 +111,7 @@ void SimThread::Stop() {
   running_ = false;
   commands_.Wake();
   if (thread_.joinable()) thread_.join();
+  authoring_.reset();  // it holds client links too
   if (logger_) logger_->Close();
   // Let go of every client link (subscriptions, commands still queued): the
   // sessions behind them must die with their transports, whose I/O objects
@@ -117,6 +119,7 @@ void SimThread::Stop() {
   scheduler_.DropCamerasFrom(0);
   commands_.Drain(drained_);
   drained_.clear();
+  carried_.clear();
 }
 
 void SimThread::Run() {
@@ -135,6 +138,7 @@ void SimThread::RunLockstep() {
       AdvanceFrame();
       continue;
     }
+    if (!carried_.empty()) continue;  // commands over the last round's budget
     // Only a wake-up source: lockstep results never depend on wall time.
     commands_.WaitUntil(std::chrono::steady_clock::now() + std::chrono::milliseconds(200));
   }
@@ -146,7 +150,7 @@ void SimThread::RunRealtime() {
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / config_.frame_hz));
   auto next_frame = Clock::now() + period;
   while (running_) {
-    commands_.WaitUntil(next_frame);
+    if (carried_.empty()) commands_.WaitUntil(next_frame);
     ApplyCommands();
     const auto now = Clock::now();
     if (now < next_frame) continue;
@@ -173,8 +177,19 @@ void SimThread::ApplyCommands() {
   // A burst's frames go back to the system (at most once a period; ref_pool.h).
   frame_pool_.Trim(limits::kFramePoolSpare, std::chrono::milliseconds(limits::kFramePoolTrimPeriodMs));
   commands_.Drain(drained_);
-  for (auto& command : drained_) {
+  // Commands left over from the last round come first: the order is kept.
+  std::vector<session::Command>& pending = carried_.empty() ? drained_ : carried_;
+  if (!carried_.empty()) std::move(drained_.begin(), drained_.end(), std::back_inserter(carried_));
+  const auto start = std::chrono::steady_clock::now();
+  const auto budget = std::chrono::milliseconds(limits::kConfigureBudgetPerFrameMs);
+  std::size_t applied = 0;
+  for (; applied < pending.size(); ++applied) {
+    session::Command& command = pending[applied];
     const session::ClientId client = command.client;
+    if (std::holds_alternative<session::ConfigureCommand>(command.body) &&
+        std::chrono::steady_clock::now() - start > budget) {
+      break;  // the rest after a frame
+    }
     std::visit(Overloaded{
                    [&](session::SubscribeCommand& c) { Subscribe(client, c); },
                    [&](session::StepCommand&) { scheduler_.AddStep(client); },
@@ -188,6 +203,12 @@ void SimThread::ApplyCommands() {
                    },
                },
                command.body);
+  }
+  if (applied < pending.size()) counters_.Add("configure.deferred");
+  if (&pending == &drained_) {
+    std::move(drained_.begin() + static_cast<std::ptrdiff_t>(applied), drained_.end(), std::back_inserter(carried_));
+  } else {
+    carried_.erase(carried_.begin(), carried_.begin() + static_cast<std::ptrdiff_t>(applied));
   }
   drained_.clear();  // drop links held by commands before waiting again
 }
@@ -245,9 +266,14 @@ void SimThread::Configure(session::ConfigureCommand& command) {
   };
   try {
     proto::Configured& answer = *reply.mutable_configured();
+    if (AuthoringWorker::Handles(command.request)) {
+      authoring_->Post(std::move(command));  // it answers; the world does not wait
+      return;
+    }
     if (command.request.has_start_log() || command.request.has_stop_log()) {
       answer.set_request_id(command.request.request_id());
       ConfigureLog(command.request, answer);
+      directory_.Publish(answer.world());  // its log_file, as later answers see it
       if (command.link) command.link->OfferReply(std::move(reply));
       return;
     }

@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "server/daemon/authoring_worker.h"
 #include "server/daemon/car_drivers.h"
 #include "server/daemon/config.h"
 #include "server/daemon/frame_assembler.h"
@@ -88,8 +89,13 @@ class SimThread {
   Simulation sim_;
   CarDrivers drivers_;                 // who drives which car with Controls; --controls-timeout-ms
   std::unique_ptr<RunLogger> logger_;  // --log's or StartLog's, else null; the scheduler's observer
+  std::unique_ptr<AuthoringWorker> authoring_;  // CheckMap, GenerateMap, SaveMap, OpenMap, ListMaps; null once stopped
   session::Scheduler scheduler_;
   std::vector<session::Command> drained_;
+  // Commands drained but not yet applied: once a frame's Configures have
+  // taken limits::kConfigureBudgetPerFrameMs, the rest (and everything after
+  // them, so order is kept) wait for the next round, after a frame.
+  std::vector<session::Command> carried_;
   std::unique_ptr<render::GlContext> gl_;
   FrameAssembler frames_;
   std::string renderer_name_;

@@ -7,7 +7,6 @@
 #include "server/common/check.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
-#include "server/daemon/map_authoring.h"
 #include "server/daemon/named_files.h"
 #include "server/daemon/run_logger.h"
 #include "server/session/effects_wire.h"
@@ -167,30 +166,14 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       change.world_changed = false;
       break;
     case Kind::kListMaps:
-      ListMapNames(config_.maps_dir, *answer.mutable_maps());
-      change.world_changed = false;
-      break;
     case Kind::kCheckMap:
-      answer.set_map_text(CanonicalMapText(request.check_map().text(), "CheckMap.text"));
-      change.world_changed = false;
-      break;
     case Kind::kGenerateMap:
-      answer.set_map_text(GeneratedMapText(request.generate_map()));
-      change.world_changed = false;
-      break;
     case Kind::kOpenMap:
-      answer.set_map_text(ReadMapFile(config_.maps_dir, request.open_map().name(), "OpenMap.name"));
-      change.world_changed = false;
-      break;
+    case Kind::kSaveMap:
     case Kind::kStartLog:
     case Kind::kStopLog:
-      SIM4CV_DEMAND(false);  // the sim thread's: it owns the log (SimThread::ConfigureLog)
-      break;
-    case Kind::kSaveMap:
-      CheckMapText(request.save_map().text(), "SaveMap.text (not saved; the file on disk is unchanged)");
-      WriteMapFile(config_.maps_dir, request.save_map().name(), request.save_map().text(),
-                   request.save_map().overwrite());
-      change.world_changed = false;
+      // The sim thread's: the log is its own (SimThread::ConfigureLog); authoring goes to its AuthoringWorker.
+      SIM4CV_DEMAND(false);
       break;
     case Kind::kSetConditions:
       SetConditions(request.set_conditions(), change);

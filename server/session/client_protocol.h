@@ -65,6 +65,7 @@ class ClientProtocol {
   void Disconnect();
 
   ClientId client() const { return client_; }
+  bool handshaken() const { return handshaken_; }
   const std::string& client_name() const { return client_name_; }
   bool subscribed() const { return subscribed_; }
   bool with_state() const { return with_state_; }

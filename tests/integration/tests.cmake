@@ -37,3 +37,6 @@ target_compile_definitions(driving_client_test PRIVATE SIM4CV_DRIVE="$<TARGET_FI
 add_dependencies(driving_client_test sim4cv_drive)
 sim4cv_test(integration controls_safety_test sim4cv_client)
 sim4cv_test(integration access_token_test sim4cv_client sim4cv_runlog)
+sim4cv_test(integration authoring_load_test sim4cv_client sim4cv_runlog)
+sim4cv_test(integration shm_lockstep_attach_test sim4cv_client)
+sim4cv_test(integration slot_reclaim_test sim4cv_client)

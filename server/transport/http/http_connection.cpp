@@ -116,6 +116,7 @@ void HttpConnection::OnRequest(const boost::system::error_code& error) {
   if (error)
     return Respond(http::status::bad_request, "bad HTTP request: " + error.message() + "\n", "text/plain", false);
 
+  answered_ = true;
   Request request = parser_->release();
   const std::string target(request.target());
   const std::string path = target.substr(0, target.find('?'));

@@ -28,6 +28,7 @@ class HttpConnection : public HttpPeer, public std::enable_shared_from_this<Http
 
   void Start();
   void Close() override;
+  bool half_open() const override { return !answered_; }
 
   // "" if a WebSocket upgrade from a page at `origin` (empty: not a browser)
   // to `host` may proceed, else why not: a page of another site (cross-site
@@ -55,6 +56,7 @@ class HttpConnection : public HttpPeer, public std::enable_shared_from_this<Http
   boost::beast::http::response<boost::beast::http::string_body> response_;
   bool closed_ = false;
   bool handed_over_ = false;  // the socket is a WsSession's now
+  bool answered_ = false;     // a whole request arrived (half_open until then)
   std::string set_cookie_;    // the studio's token cookie, sent with the next response
 };
 

@@ -20,6 +20,9 @@ class HttpPeer {
   virtual ~HttpPeer() = default;
   // Closes the socket at once (a WebSocket also ends its client session).
   virtual void Close() = 0;
+  // Whether it has completed nothing yet (no request, no Hello): at
+  // capacity the oldest such connection makes room for a newcomer.
+  virtual bool half_open() const = 0;
 };
 
 class HttpHub {
@@ -41,6 +44,18 @@ class HttpHub {
     std::size_t count = 0;
     for (const auto& [key, entry] : peers_) count += entry.rejecting == rejecting;
     return count;
+  }
+  // Closes the oldest served connection that is half open (keys grow with
+  // time), so a client that keeps reconnecting half-sent requests cannot
+  // hold every slot. Whether there was one.
+  bool ReclaimStalestHalfOpen() {
+    for (auto& [key, entry] : peers_) {
+      if (entry.rejecting || !entry.peer->half_open()) continue;
+      const std::shared_ptr<HttpPeer> stalest = entry.peer;  // Close() forgets it
+      stalest->Close();
+      return true;
+    }
+    return false;
   }
   void CloseAll() {
     auto open = peers_;  // Close() forgets itself

@@ -67,6 +67,10 @@ class HttpTransport : public Transport {
 
  private:
   void Accepted(asio::ip::tcp::socket socket) {
+    if (hub_.Count(false) >= options_.max_clients && hub_.ReclaimStalestHalfOpen()) {
+      LOG_INFO("closed the oldest HTTP connection that had completed no request, for a new one (--http-max-clients "
+               << options_.max_clients << ")");
+    }
     const bool over_capacity = hub_.Count(false) >= options_.max_clients;
     if (over_capacity && hub_.Count(true) >= limits::kMaxHttpRejecting) {
       // A flood: closing unanswered keeps the descriptors it can hold bounded.

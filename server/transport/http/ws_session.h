@@ -50,6 +50,7 @@ class WsSession : public HttpPeer, public StreamSession<WsSession>, public std::
   void Reject(boost::beast::http::request<boost::beast::http::empty_body> request, proto::ErrorCode code,
               const std::string& message);
   void Close() override;
+  bool half_open() const override { return !session_ || !session_->protocol().handshaken(); }
 
  private:
   friend class StreamSession<WsSession>;

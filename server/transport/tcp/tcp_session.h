@@ -44,6 +44,9 @@ class TcpSession : public StreamSession<TcpSession>, public std::enable_shared_f
   void Reject(proto::ErrorCode code, const std::string& message);
   // Closes the socket at once and tells the sim thread the client is gone.
   void Close();
+  // Whether its Hello was accepted; a connection that has not is half-open,
+  // the first to go when the slots run out.
+  bool handshaken() const { return session_ && session_->protocol().handshaken(); }
 
  private:
   friend class StreamSession<TcpSession>;

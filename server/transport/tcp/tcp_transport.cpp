@@ -58,6 +58,7 @@ class TcpTransport : public Transport {
     const session::ClientId id = session::NewClientId();
     auto session = std::make_shared<TcpSession>(std::move(socket), id, *context_, options_,
                                                 [this](session::ClientId closed) { sessions_.erase(closed); });
+    if (sessions_.size() >= options_.max_clients) ReclaimStalestHalfOpen();
     if (sessions_.size() >= options_.max_clients) {
       session->Reject(proto::ERROR_CODE_TOO_MANY_CLIENTS,
                       "the daemon already serves " + std::to_string(sessions_.size()) +
@@ -66,6 +67,21 @@ class TcpTransport : public Transport {
       sessions_.emplace(id, session);
       LOG_INFO("client " << id << " connected over TCP");
       session->Start();
+    }
+  }
+
+  // At capacity, the oldest connection that has not said Hello makes room
+  // for the newcomer (ids grow with time: the map's first is the oldest): a
+  // process that keeps reconnecting half-sent requests cannot hold every
+  // slot against clients that complete theirs.
+  void ReclaimStalestHalfOpen() {
+    for (const auto& [id, session] : sessions_) {
+      if (session->handshaken()) continue;
+      LOG_INFO("client " << id << " closed: it had not completed its Hello, and a new connection needs its slot "
+                         "(--max-clients " << options_.max_clients << ")");
+      const std::shared_ptr<TcpSession> stalest = session;  // Close() erases it from the map
+      stalest->Close();
+      return;
     }
   }
 

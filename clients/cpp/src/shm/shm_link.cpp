@@ -122,6 +122,10 @@ class ShmLink : public Link {
   // The next reply that is not the answer to a keep-alive.
   bool Reply(Envelope& out, Deadline deadline) {
     while (shm_.ReceiveReply(out, Until(deadline))) {
+      // Frames from the subscription on: one the ring already held when it
+      // was answered (other clients stepped) is not the answer to a Step of
+      // this one; taking it would leave a lockstep client one frame behind.
+      if (out.has_subscribed()) last_frame_id_ = shm_.newest_frame_id();
       if (!(out.has_state() && keepalive_states_ > 0)) return true;
       --keepalive_states_;
     }
