@@ -17,6 +17,7 @@ PACKAGES=(
   python3-venv dpkg-dev  # the install test: a fresh venv for the wheel, dpkg-shlibdeps for cpack -G DEB
   clang libclang-rt-14-dev  # the fuzz build (scripts/fuzz.sh): clang and its libFuzzer/sanitizer runtimes
   chromium python3-websocket  # the studio's browser tests (tests/studio, tools/cdp_driver.py): headless Chromium over DevTools
+  opencv-data  # the realism probe (bench/realism_probe.py): OpenCV's Haar full- and upper-body cascades
 )
 
 missing=()
