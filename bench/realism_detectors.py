@@ -45,7 +45,7 @@ def hog_detectors():
     for name, hog in (("hog_default", _default_hog()), ("hog_daimler", _daimler_hog())):
         def detect(bgr, hog=hog):
             boxes, _weights = hog.detectMultiScale(bgr, **HOG_PARAMS)
-            return [tuple(int(v) for v in box) for box in boxes]
+            return sorted(tuple(int(v) for v in box) for box in boxes)  # its threads return them in any order
         detectors[name] = detect
     return detectors
 
@@ -61,7 +61,7 @@ def haar_detectors(haar_dir=HAAR_DIR):
             continue
         def detect(bgr, cascade=cascade):
             gray = cv2.equalizeHist(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY))
-            return [tuple(int(v) for v in box) for box in cascade.detectMultiScale(gray, **HAAR_PARAMS)]
+            return sorted(tuple(int(v) for v in box) for box in cascade.detectMultiScale(gray, **HAAR_PARAMS))
         detectors[name] = detect
     return detectors
 
@@ -124,15 +124,30 @@ def match(detections, walkers, rule):
     return sorted(found), len(detections) - len(used_d)
 
 
-def probe_photo(path, detectors):
-    """Each detector's boxes on a real photograph (no ground truth: none of the packaged photos is annotated)."""
-    bgr = cv2.imread(path, cv2.IMREAD_COLOR)
-    if bgr is None:
-        return {"photo": path, "error": "cannot read"}
-    result = {"photo": path, "width": int(bgr.shape[1]), "height": int(bgr.shape[0])}
-    for name, detect in detectors.items():
-        result[name] = [list(box) for box in detect(bgr)]
-    return result
+def _read_images(path, video_frames):
+    """(label, bgr) of a photograph, or of every 100th frame of a video (the first video_frames)."""
+    if not path.endswith((".avi", ".mp4")):
+        bgr = cv2.imread(path, cv2.IMREAD_COLOR)
+        return [(os.path.basename(path), bgr)] if bgr is not None else []
+    video, images = cv2.VideoCapture(path), []
+    for index in range(0, 100 * video_frames, 100):
+        video.set(cv2.CAP_PROP_POS_FRAMES, index)
+        ok, bgr = video.read()
+        if ok:
+            images.append(("%s#%d" % (os.path.basename(path), index), bgr))
+    return images
+
+
+def probe_photo(path, detectors, video_frames=8):
+    """Each detector's boxes on real photographs or video frames (no ground truth: none that
+    Debian packages is annotated)."""
+    results = []
+    for label, bgr in _read_images(path, video_frames):
+        result = {"photo": label, "width": int(bgr.shape[1]), "height": int(bgr.shape[0])}
+        for name, detect in detectors.items():
+            result[name] = [list(box) for box in detect(bgr)]
+        results.append(result)
+    return results or [{"photo": os.path.basename(path), "error": "cannot read"}]
 
 
 def mask_box(mask, object_id):

@@ -21,6 +21,7 @@ import json
 import math
 import os
 import random
+import signal
 import sys
 import time
 
@@ -42,8 +43,10 @@ WALKERS = 8           # spawned walkers, pacing 12 m of lane each
 STEPS_BETWEEN = 4     # frames simulated between two probe frames (walkers move on)
 EYE_HEIGHT = 1.6      # camera height, m
 # Real photographs with people that Debian packages ship (none annotated).
-PACKAGED_PHOTOS = ["/usr/lib/python3/dist-packages/skimage/data/astronaut.png",
-                   "/usr/lib/python3/dist-packages/skimage/data/camera.png"]
+OPENCV_DOC_DATA = "/usr/share/doc/opencv-doc/examples/data/"  # opencv-doc
+SKIMAGE_DATA = "/usr/lib/python3/dist-packages/skimage/data/"  # python3-skimage
+PACKAGED_PHOTOS = [OPENCV_DOC_DATA + "vtest.avi", OPENCV_DOC_DATA + "basketball1.png", OPENCV_DOC_DATA + "messi5.jpg",
+                   SKIMAGE_DATA + "astronaut.png", SKIMAGE_DATA + "camera.png"]
 
 
 def spawn_walkers(client, rng):
@@ -147,13 +150,13 @@ def markdown(result):
             cells.append("%d (%s), %.2f FP/frame" % (s["found"], recall, s["false_positives_per_frame"]))
         lines.append("| %s | %d | %d | %s |" % (preset, summary["frames"], summary["walkers"], " | ".join(cells)))
     lines.append("")
-    lines.append("Packaged real photographs (no annotations; boxes each detector returns):")
+    lines.append("Packaged real photographs (not annotated; how many boxes each detector returns):")
     lines.append("")
     for photo in result["photos"]:
         counts = ", ".join("%s %d" % (n, len(photo.get(n, []))) for n in names) if "error" not in photo else photo["error"]
         lines.append("- `%s`: %s" % (photo["photo"], counts))
     if not result["photos"]:
-        lines.append("- none found (python3-skimage not installed)")
+        lines.append("- none found (install opencv-doc or python3-skimage, or pass --photos)")
     lines.append("")
     lines.append("Offline car detectors packaged with OpenCV: %s" % (", ".join(result["car_detectors"]) or "none"))
     return "\n".join(lines) + "\n"
@@ -168,6 +171,8 @@ def main(argv=None):
     parser.add_argument("--save-frames", action="store_true", help="also write each frame's RGB and mask PNGs")
     parser.add_argument("--photos", nargs="*", default=None, help="real photographs (default: the packaged ones present)")
     args = parser.parse_args(argv)
+    # SIGTERM unwinds like Ctrl-C, so the daemon this probe started is stopped too.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     os.makedirs(args.out, exist_ok=True)
     start = time.monotonic()
     detectors = dict(det.hog_detectors(), **det.haar_detectors())
@@ -184,8 +189,7 @@ def main(argv=None):
         frames = run_preset(preset, args, detectors, frame_dir)
         result["frames"][preset] = frames
         result["summary"][preset] = summarise(frames, list(detectors))
-    hog_only = det.hog_detectors()
-    result["photos"] = [det.probe_photo(p, hog_only) for p in photos]
+    result["photos"] = [image for p in photos for image in det.probe_photo(p, detectors)]
     with open(os.path.join(args.out, "realism_probe.json"), "w") as f:
         json.dump(result, f, indent=1, sort_keys=True)
     table = markdown(result)
