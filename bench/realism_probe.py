@@ -32,7 +32,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "clients", "python"))
 
 import realism_detectors as det  # noqa: E402
 import sim4cv  # noqa: E402
-from sim4cv.daemon import OwnDaemon  # noqa: E402
+from sim4cv.daemon import REPO_ROOT, OwnDaemon  # noqa: E402
 
 PEDESTRIAN = 7  # OBJECT_CLASS_PEDESTRIAN
 WIDTH, HEIGHT, FOV_Y = 640, 480, 60.0
@@ -91,7 +91,7 @@ def walkers_to_find(frame, mask):
 
 def run_preset(preset, args, detectors, frame_dir):
     rng = random.Random(args.seed)
-    flags = ["--map", MAP, "--seed", str(args.seed), "--conditions", preset] + TRAFFIC
+    flags = ["--map", os.path.join(REPO_ROOT, MAP), "--seed", str(args.seed), "--conditions", preset] + TRAFFIC
     frames = []
     with OwnDaemon(flags) as daemon, sim4cv.connect(daemon.address, name="realism-probe") as client:
         walkers = spawn_walkers(client, rng)
