@@ -73,6 +73,23 @@ def camera_pose_towards(position, heading_deg, rng):
     return x, y, yaw, pitch
 
 
+def next_target(frame, walkers, index):
+    """The walker the next frame is aimed at: (id, position, velocity). Odd frames: the traffic walker
+    (its six looks) nearest to the camera among those the last frame's 3D ground truth holds, if any;
+    else, and on even frames, one of the spawned walkers (one look) in turn."""
+    if index % 2 == 1:
+        camera = frame.message.camera_pose.position
+        traffic = [o for o in frame.message.objects if o.object_class == PEDESTRIAN and o.object_id not in walkers]
+        if traffic:
+            nearest = min(traffic, key=lambda o: ((o.position.x - camera.x) ** 2 + (o.position.y - camera.y) ** 2,
+                                                  o.object_id))
+            velocity = nearest.linear_velocity
+            return nearest.object_id, (nearest.position.x, nearest.position.y), (velocity.x, velocity.y)
+    target = walkers[(index // 2) % len(walkers)]
+    pose = next(e for e in frame.entities if e.id == target)
+    return target, pose.position, pose.linear_velocity
+
+
 def walkers_to_find(frame, mask):
     """Every pedestrian box of the frame with the reason it is (or is not) one to find."""
     listed = []
@@ -101,15 +118,14 @@ def run_preset(preset, args, detectors, frame_dir):
         for index in range(args.frames):
             for _ in range(STEPS_BETWEEN):
                 frame = client.step_and_receive(timeout=60.0)
-            target = walkers[index % len(walkers)]
-            pose = next(e for e in frame.entities if e.id == target)
-            heading = math.degrees(math.atan2(pose.linear_velocity[1], pose.linear_velocity[0]))
-            x, y, yaw, pitch = camera_pose_towards(pose.position, heading, rng)
+            target, position, velocity = next_target(frame, walkers, index)
+            heading = math.degrees(math.atan2(velocity[1], velocity[0]))
+            x, y, yaw, pitch = camera_pose_towards(position, heading, rng)
             client.set_camera_pose("probe", x, y, EYE_HEIGHT, yaw, pitch)
             frame = client.step_and_receive(timeout=60.0)
             bgr = cv2.cvtColor(frame.image("rgb"), cv2.COLOR_RGB2BGR)
             mask = frame.image("mask").copy()
-            record = {"frame_id": frame.frame_id, "walker_aimed_at": target, "pedestrians": walkers_to_find(frame, mask)}
+            record = {"frame_id": frame.frame_id, "walker_aimed_at": target, "traffic_walker": target not in walkers, "pedestrians": walkers_to_find(frame, mask)}
             gt = [tuple(p["box"]) for p in record["pedestrians"] if p["to_find"]]
             for name, detect in detectors.items():
                 boxes = detect(bgr)

@@ -35,13 +35,13 @@ def test_probe_lists_the_walkers_the_mask_shows(tmp_path):
     assert result["car_detectors"] == []
     summary = result["summary"]["clear_noon"]
     frames = result["frames"]["clear_noon"]
-    assert summary["frames"] == len(frames) == 2
+    assert summary["frames"] == len(frames) == 2 and [f["traffic_walker"] for f in frames] == [False, True]
     assert summary["walkers"] == sum(p["to_find"] for f in frames for p in f["pedestrians"]) >= 2
     for index, frame in enumerate(frames):
         mask = cv2.imread(str(tmp_path / "frames" / ("clear_noon_%03d_mask.png" % index)), cv2.IMREAD_UNCHANGED)
         assert mask.dtype == np.uint16 and mask.shape == (480, 640)
         aimed = [p for p in frame["pedestrians"] if p["object_id"] == frame["walker_aimed_at"]]
-        assert aimed and aimed[0]["to_find"], "the walker the camera faces is one to find: %s" % frame
+        assert aimed and (aimed[0]["to_find"] or frame["traffic_walker"]), "the spawned walker faced is one to find"
         for walker in frame["pedestrians"]:
             box, pixels = mask_box(mask, walker["object_id"])
             assert list(box) == walker["box"] and pixels == walker["visible_pixels"], walker
