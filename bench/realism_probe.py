@@ -3,13 +3,14 @@
 on real photographs find sim4cv's walkers? For each conditions preset it
 starts its own sim4cvd (lockstep) on a map with traffic, spawns walkers along
 the target car's lane, and for a seeded set of frames puts a 640x480 camera
-4.5-6.5 m in front of or behind one of them at eye level. The walkers the
+4.5-6.5 m in front of or behind a walker at eye level (a spawned one, or on
+odd frames the nearest traffic walker, when there is one). The walkers the
 ground truth lists as OBJECT_CLASS_PEDESTRIAN with a box at least 96 px tall,
 visibility >= 0.5 and not touching the image border are the ones to find;
 OpenCV's default (INRIA) and Daimler HOG people detectors and its Haar
 full- and upper-body cascades run on each RGB frame (matching rules in
-bench/realism_detectors.py). Also runs the HOG detectors on packaged real
-photographs with people. Writes JSON and a Markdown table, the same bytes
+bench/realism_detectors.py). Also runs them on packaged real photographs
+and video with people. Writes JSON and a Markdown table, the same bytes
 for the same arguments.
 
   /usr/bin/python3 bench/realism_probe.py --out build/realism [--frames 33] [--seed 1]
