@@ -17,6 +17,8 @@ start=$(date +%s%N)
 rm -f "$OUT/sheet.png"
 seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { print (b - a) / 1e9 }')
 
+# The "Realism probe" section (bench/realism_probe.py writes its table) is kept as it is.
+probe_section=$(sed -n '/^## Realism probe/,$p' docs/gallery.md 2>/dev/null || true)
 views="uav car_front car_chase walkers"
 looks="fast $(sed -n 's/^ *X(\([A-Z_]*\), "\([a-z_]*\)".*/\2/p' protocol/conditions.h | tr '\n' ' ') noise randomised_0 randomised_1 randomised_2"
 looks="$looks antialias exposure_plus_1ev white_balance_3200k motion_blur lens jpeg_15 action_camera"
@@ -47,5 +49,6 @@ looks="$looks antialias exposure_plus_1ev white_balance_3200k motion_blur lens j
     for view in $views; do printf ' ![%s %s](gallery/%s_%s.png) |' "$view" "$look" "$view" "$look"; done
     echo
   done
+  if [ -n "$probe_section" ]; then echo; echo "$probe_section"; fi
 } > docs/gallery.md
 echo "gallery: docs/gallery.md, $(ls "$OUT" | wc -l) pictures in $OUT/ ($(du -sh "$OUT" | cut -f1))"

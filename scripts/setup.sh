@@ -18,6 +18,7 @@ PACKAGES=(
   clang libclang-rt-14-dev  # the fuzz build (scripts/fuzz.sh): clang and its libFuzzer/sanitizer runtimes
   chromium python3-websocket  # the studio's browser tests (tests/studio, tools/cdp_driver.py): headless Chromium over DevTools
   slurmctld slurmd slurm-client munge python3-distributed  # tests/python/test_scaling.py: a one-machine Slurm cluster and Dask (docs/scaling.md)
+  opencv-data  # the realism probe (bench/realism_probe.py): OpenCV's Haar full- and upper-body cascades
 )
 
 missing=()
