@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include "tests/integration/ring_map.h"
 #include "tests/integration/run_log_fixture.h"
 #include "tests/support/configure_fixture.h"
 
@@ -22,17 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kRing[] =
-    "sim4cv-map 1\nname ring\ntile_size 20\nsurroundings desert\ngrid 3 3\n###\n#.#\n###\nend\n"
-    "route loop closed\ntiles 0,0 0,1 0,2 1,2 2,2 2,1 2,0 1,0\n";
 constexpr char kSecret[] = "the secret first line of a file outside the maps folder\n";
-
-std::string FileText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // Exchanges two names (a real folder and a link to one outside) atomically,
 // as fast as it can, until stopped: at every moment the name inside is one
