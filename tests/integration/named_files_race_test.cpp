@@ -151,5 +151,26 @@ TEST_F(NamedFilesRaceTest, ANameTheFileSystemCannotHoldIsRefusedBeforeAnythingIs
   EXPECT_FALSE(fs::exists(fs::path(maps_ / "logs")));
 }
 
+TEST_F(NamedFilesRaceTest, SaveMapKeepsEachFoldersQuotaOfFilesAndBytes) {
+  const auto save = [&](const std::string& name) {
+    Ask([&](proto::Configure& c) {
+      c.mutable_save_map()->set_name(name);
+      c.mutable_save_map()->set_text(kRing);
+      c.mutable_save_map()->set_overwrite(true);
+    });
+  };
+  fs::create_directories(fs::path(maps_ / "many"));
+  for (int i = 0; i < 1000; ++i) std::ofstream(maps_ / ("many/m" + std::to_string(i) + ".map")) << kRing;
+  ExpectRefused([&] { save("many/one_more"); }, proto::ERROR_CODE_IO,
+                {"SaveMap: the folder", "would hold 1001 maps", "at most 1000 maps", "limits::kMaxMapsPerFolder"});
+  save("many/m7");  // replacing one keeps the count
+  fs::create_directories(fs::path(maps_ / "big"));
+  std::ofstream(maps_ / "big/huge.map") << kRing;
+  fs::resize_file(fs::path(maps_ / "big/huge.map"), 64u << 20);  // sparse: 64 MiB in name only
+  ExpectRefused([&] { save("big/small"); }, proto::ERROR_CODE_IO, {"bytes; a folder holds at most", "67108864 bytes"});
+  EXPECT_FALSE(fs::exists(fs::path(maps_ / "big/small.map")));
+  save("other/small");  // another folder has its own quota
+}
+
 }  // namespace
 }  // namespace sim4cv::testing
