@@ -212,6 +212,12 @@ inline constexpr std::size_t kMaxListedMaps = 1000;
 inline constexpr std::size_t kMaxFileNamePartBytes = 200;
 // ListMaps: how deep below --maps-dir the walk goes.
 inline constexpr int kMaxListedMapDepth = 8;
+// SaveMap's quota per folder under --maps-dir: at most this many ".map"
+// files and bytes of them (the new map counted, the one it replaces not), so
+// one client cannot fill the disk (255 MB in 1.5 s before). Over it:
+// IO, naming the folder and the limit.
+inline constexpr std::size_t kMaxMapsPerFolder = 1000;
+inline constexpr std::uint64_t kMaxMapFolderBytes = std::uint64_t{64} << 20;
 
 // Subscribe.max_fps: the highest frame rate cap a subscriber may ask for
 // (above it, ask for 0: every frame).

@@ -143,6 +143,39 @@ class MapWalk {
   std::vector<std::string> found_;
 };
 
+// SaveMap's quota: refuses `adding` more bytes in `folder` (replacing
+// `leaf`, if it exists) past limits::kMaxMapsPerFolder files or
+// limits::kMaxMapFolderBytes bytes of maps.
+void CheckQuota(int folder, const std::string& leaf, std::size_t adding, const std::string& shown_folder) {
+  const int listed = ::openat(folder, ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  DIR* dir = listed < 0 ? nullptr : ::fdopendir(listed);
+  if (dir == nullptr) {
+    if (listed >= 0) ::close(listed);
+    return;
+  }
+  std::size_t count = 1;
+  std::uint64_t bytes = adding;
+  while (const dirent* entry = ::readdir(dir)) {
+    const std::string name = entry->d_name;
+    struct stat info {};
+    if (name == leaf || name.size() < 5 || name.compare(name.size() - 4, 4, ".map") != 0 ||
+        ::fstatat(::dirfd(dir), name.c_str(), &info, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(info.st_mode)) {
+      continue;
+    }
+    ++count;
+    bytes += static_cast<std::uint64_t>(info.st_size);
+  }
+  ::closedir(dir);
+  if (count > limits::kMaxMapsPerFolder || bytes > limits::kMaxMapFolderBytes) {
+    Fail(proto::ERROR_CODE_IO, "SaveMap: the folder " + Quoted(shown_folder) + " would hold " + std::to_string(count) +
+                                   " maps of " + std::to_string(bytes) + " bytes; a folder holds at most " +
+                                   std::to_string(limits::kMaxMapsPerFolder) + " maps and " +
+                                   std::to_string(limits::kMaxMapFolderBytes) +
+                                   " bytes (limits::kMaxMapsPerFolder, kMaxMapFolderBytes): remove some, or save "
+                                   "into another folder");
+  }
+}
+
 }  // namespace
 
 void ListMapNames(const std::string& maps_dir, google::protobuf::RepeatedPtrField<std::string>& names) {
@@ -199,6 +232,7 @@ void WriteMapFile(const std::string& maps_dir, const std::string& name, const st
   const std::string leaf = SplitLeaf(relative).second;
   const std::string shown = root.Shown(relative);
   RefuseExisting(folder.get(), leaf, shown, overwrite, "SaveMap", root.flag);
+  CheckQuota(folder.get(), leaf, text.size(), root.Shown(SplitLeaf(relative).first));
   // Beside the target, so the rename stays on one file system; the pid keeps
   // two daemons sharing a folder apart, O_EXCL a stale leftover.
   std::string hidden = leaf;  // built step by step: GCC 12 warns (-Wrestrict) on "." + ...

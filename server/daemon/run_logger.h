@@ -44,6 +44,8 @@ class RunLogger final : public session::ClientLink {
   // tracker box (with the camera it subscribes to), the boxes gathered by
   // OfferFrame since the last Append, and the car's command.
   void Append(const sim::State& state, const session::Scheduler& scheduler);
+  // False once closed or after a write failed.
+  bool open() const { return writer_ != nullptr; }
   // Closes the file and logs what was written and what it cost the sim
   // thread. Idempotent; the destructor closes too, silently.
   void Close();

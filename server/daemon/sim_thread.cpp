@@ -362,6 +362,15 @@ void SimThread::AdvanceFrame() {
   if (logger_) {
     logger_->Append(state, scheduler_);
     scheduler_.ReleaseFrames();  // only now, with the record written, may clients see the frames
+    if (!logger_->open()) {
+      // A write failed (full disk, file size limit): the log is closed and
+      // no longer counts as written, so LoadMap, Reset and SetConditions
+      // are allowed again and WorldInfo.log_file says "" from now on.
+      scheduler_.SetObserver(nullptr);
+      logger_.reset();
+      sim_.SetLogFile("");
+      PublishWorld();
+    }
   }
 }
 

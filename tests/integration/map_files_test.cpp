@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "tests/integration/ring_map.h"
 #include "tests/support/configure_fixture.h"
 
 namespace sim4cv::testing {
@@ -16,16 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kRing[] =
-    "sim4cv-map 1\nname ring\ntile_size 20\nsurroundings desert\ngrid 3 3\n###\n#.#\n###\nend\n"
-    "route loop closed\ntiles 0,0 0,1 0,2 1,2 2,2 2,1 2,0 1,0\n";
-
-std::string FileText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 class MapFilesTest : public ConfigureTest {
  protected:

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include "tests/integration/ring_map.h"
 #include "tests/integration/run_log_fixture.h"
 #include "tests/support/configure_fixture.h"
 
@@ -22,17 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr char kRing[] =
-    "sim4cv-map 1\nname ring\ntile_size 20\nsurroundings desert\ngrid 3 3\n###\n#.#\n###\nend\n"
-    "route loop closed\ntiles 0,0 0,1 0,2 1,2 2,2 2,1 2,0 1,0\n";
 constexpr char kSecret[] = "the secret first line of a file outside the maps folder\n";
-
-std::string FileText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // Exchanges two names (a real folder and a link to one outside) atomically,
 // as fast as it can, until stopped: at every moment the name inside is one
@@ -158,6 +149,27 @@ TEST_F(NamedFilesRaceTest, ANameTheFileSystemCannotHoldIsRefusedBeforeAnythingIs
   ExpectRefused([&] { Ask([&](proto::Configure& c) { c.mutable_start_log()->set_name("logs/" + part); }); },
                 proto::ERROR_CODE_INVALID_ARGUMENT, {"StartLog.name", "a part at most 200"});
   EXPECT_FALSE(fs::exists(fs::path(maps_ / "logs")));
+}
+
+TEST_F(NamedFilesRaceTest, SaveMapKeepsEachFoldersQuotaOfFilesAndBytes) {
+  const auto save = [&](const std::string& name) {
+    Ask([&](proto::Configure& c) {
+      c.mutable_save_map()->set_name(name);
+      c.mutable_save_map()->set_text(kRing);
+      c.mutable_save_map()->set_overwrite(true);
+    });
+  };
+  fs::create_directories(fs::path(maps_ / "many"));
+  for (int i = 0; i < 1000; ++i) std::ofstream(maps_ / ("many/m" + std::to_string(i) + ".map")) << kRing;
+  ExpectRefused([&] { save("many/one_more"); }, proto::ERROR_CODE_IO,
+                {"SaveMap: the folder", "would hold 1001 maps", "at most 1000 maps", "limits::kMaxMapsPerFolder"});
+  save("many/m7");  // replacing one keeps the count
+  fs::create_directories(fs::path(maps_ / "big"));
+  std::ofstream(maps_ / "big/huge.map") << kRing;
+  fs::resize_file(fs::path(maps_ / "big/huge.map"), 64u << 20);  // sparse: 64 MiB in name only
+  ExpectRefused([&] { save("big/small"); }, proto::ERROR_CODE_IO, {"bytes; a folder holds at most", "67108864 bytes"});
+  EXPECT_FALSE(fs::exists(fs::path(maps_ / "big/small.map")));
+  save("other/small");  // another folder has its own quota
 }
 
 }  // namespace
