@@ -134,7 +134,7 @@ def main(argv=None):
             index = args.index if args.index is not None else tasks.index_from_environment()
             # SIGTERM (scancel, a Ctrl-C'd executor): unwind, so the run stops its trackers and daemon
             signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
-            with tasks.TaskEnvironment(index, args.cpus):
+            with tasks.TaskEnvironment(index, args.cpus, args.out):
                 skipped, error = tasks.run_one(args.out, index, args.daemon)
             print("sim4cv.experiment: task %d %s" % (index, "skipped (done before)" if skipped else
                                                        "failed: " + error if error else "done"), file=sys.stderr)
