@@ -78,14 +78,17 @@ def task_processes(out_dir):
     return pids
 
 
-def marked_processes(marker):
-    """PIDs whose environment holds SIM4CV_TASK=<marker...>."""
+def marked_processes(marker, out_dir):
+    """PIDs whose environment holds SIM4CV_TASK=<marker...> and SIM4CV_TASK_DIR=out_dir
+    (other tests' studies may run beside)."""
     found = []
     for pid in filter(str.isdigit, os.listdir("/proc")):
         try:
             with open("/proc/%s/environ" % pid, "rb") as f:
-                if ("SIM4CV_TASK=" + marker).encode() in f.read():
-                    found.append(int(pid))
+                environ = f.read()
+            if ("\0SIM4CV_TASK=" + marker).encode() in b"\0" + environ and \
+                    ("\0SIM4CV_TASK_DIR=%s\0" % out_dir).encode() in b"\0" + environ + b"\0":
+                found.append(int(pid))
         except OSError:
             continue
     return found
@@ -110,26 +113,29 @@ def wait_for(predicate, timeout=120, what="condition"):
 
 
 def test_task_killed_with_kill9_leaves_nothing(tmp_path):
+    """A task of the local executor killed with kill -9 mid-run (its daemon and
+    tracker processes up) leaves no process, semaphore or temporary folder, and
+    the executor goes on with the other tasks."""
     out = tmp_path / "killed"
-    assert cli("plan", SWEEP, "--out", out).returncode == 0
     shm_before = set(os.listdir("/dev/shm"))
-    task = subprocess.Popen([sys.executable, "-m", "sim4cv.experiment", "run-one", str(out), "--index", "1"],
-                            cwd=REPO_ROOT, env=ENV, stderr=subprocess.PIPE)
-    marker = "local-1-%d" % task.pid
-    wait_for(lambda: os.path.exists(out / "runs" / os.listdir(out / "runs")[0] / "frames_0.csv")
-             if os.path.isdir(out / "runs") and os.listdir(out / "runs") else False, what="the run's first frames")
-    alive = marked_processes(marker)
-    names = {comm(p) for p in alive}
-    assert "sim4cvd" in names, names  # the task's daemon is up, mid-run
+    run = subprocess.Popen([sys.executable, "-m", "sim4cv.experiment", "run", SWEEP, "--jobs", "1", "--out", str(out)],
+                           cwd=REPO_ROOT, env=ENV, stderr=subprocess.PIPE, text=True)
+    daemon = wait_for(lambda: [p for p in marked_processes("local-1-", out) if comm(p) == "sim4cvd"], what="task 1's daemon")
+    marker = [line.split("=", 1)[1] for line in open("/proc/%d/environ" % daemon[0], "rb").read().decode().split("\0")
+              if line.startswith("SIM4CV_TASK=")][0]
+    task_pid = int(marker.split("-")[-1])  # the run-one process: local-<index>-<pid>
+    wait_for(lambda: len(marked_processes(marker, out)) >= 3, what="the task's tracker process")  # run-one, daemon, tracker
     shm_during = set(os.listdir("/dev/shm")) - shm_before
-    task.send_signal(signal.SIGKILL)
-    task.wait()
-    wait_for(lambda: not marked_processes(marker), timeout=60, what="the task's processes to end")
+    os.kill(task_pid, signal.SIGKILL)
+    _, err = run.communicate(timeout=240)
+    assert run.returncode == 1, err  # one task not done
+    assert not marked_processes(marker, out)
     leftovers = [n for n in shm_during & set(os.listdir("/dev/shm")) if n.startswith("sem.mp") or marker in n]
     assert not leftovers, leftovers
     assert not [d for d in os.listdir("/tmp") if d.startswith("sim4cv-task-" + marker)]
     status = cli("status", out)
-    assert status.returncode == 1 and "missing 1 " in status.stdout, status.stdout
+    assert status.returncode == 1 and "3 done, 0 failed, 1 missing" in status.stdout, status.stdout
+    assert "missing 1 " in status.stdout, status.stdout
 
 
 @pytest.mark.parametrize("cpus, slurm_cpus, threads", [("3", "", 3), ("", "1", 1)])
@@ -158,7 +164,7 @@ def test_slurm_sweep_kill_resubmit_gather(tmp_path, reference):
         assert proc.returncode == 0 and "submitted Slurm jobs" in proc.stderr, proc.stderr
         array_job = proc.stderr.split("submitted Slurm jobs ")[1].split(",")[0]
         # kill task 0 mid-run: its daemon (marked <array job>-<index>-<pid>) is up
-        wait_for(lambda: [p for p in marked_processes("%s-0-" % array_job) if comm(p) == "sim4cvd"],
+        wait_for(lambda: [p for p in marked_processes("%s-0-" % array_job, out) if comm(p) == "sim4cvd"],
                  what="task 0's daemon")
         subprocess.run(["scancel", "--signal=KILL", "%s_0" % array_job], env=env, check=True)
         wait_for(lambda: not subprocess.run(["squeue", "-h"], env=env, capture_output=True, text=True).stdout.strip(),

@@ -13,7 +13,7 @@ import time
 import uuid
 
 from . import tasks as tk
-from .daemon import REPO_ROOT, daemon_path
+from .daemon import REPO_ROOT, daemon_path, die_with_parent
 
 PYTHON_DIR = os.path.join(REPO_ROOT, "clients", "python")
 
@@ -44,6 +44,37 @@ def pending_by_phase(out_dir, only_unfinished=True):
     return dict(sorted(phases.items()))
 
 
+def run_task_process(argv, env):
+    """Runs a run-one process in a session of its own: (exit status, its output).
+    Whatever it leaves in that session when it ends (the tracker processes of a
+    task killed with kill -9, which would otherwise hold its output pipe open
+    for ever) is killed."""
+    import tempfile
+    with tempfile.TemporaryFile(mode="w+") as log:
+        proc = subprocess.Popen(argv, env=env, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True, preexec_fn=lambda: die_with_parent(15))  # Ctrl-C of `run`
+        rc = proc.wait()
+        _end_session(proc.pid)
+        log.seek(0)
+        return rc, log.read()
+
+
+def _end_session(pgid, grace_s=10.0):
+    """SIGTERM to what is left in the process group (Python's resource tracker
+    ignores it and unlinks the task's semaphores once the others are gone),
+    then SIGKILL to whatever is still there after grace_s."""
+    import signal
+    deadline = time.monotonic() + grace_s
+    try:
+        os.killpg(pgid, signal.SIGTERM)
+        while time.monotonic() < deadline:
+            time.sleep(0.1)
+            os.killpg(pgid, 0)
+        os.killpg(pgid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
 def _last_line(text):
     lines = [line for line in (text or "").splitlines() if line.strip()]
     return lines[-1] if lines else ""
@@ -68,11 +99,10 @@ def run_local(out_dir, jobs, daemon=None, progress_class=None):
             if tk.is_done(out_dir, task):
                 return task, True, 0.0, ""
             t0 = time.monotonic()
-            proc = subprocess.run(run_one_argv(out_dir, task["index"], daemon), env=env, stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            sys.stderr.write(proc.stderr if proc.returncode else "")
-            failure = tk.read_json(tk.failure_path(out_dir, task["index"])) if proc.returncode else None
-            note = (failure or {}).get("error") or _last_line(proc.stderr) if proc.returncode else ""
+            rc, output = run_task_process(run_one_argv(out_dir, task["index"], daemon), env)
+            sys.stderr.write(output if rc else "")
+            failure = tk.read_json(tk.failure_path(out_dir, task["index"])) if rc else None
+            note = (failure or {}).get("error") or _last_line(output) if rc else ""
             return task, False, time.monotonic() - t0, note
 
         with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
@@ -167,10 +197,10 @@ def wait_slurm(job_ids, poll_s=2.0, timeout_s=None):
 def _dask_task(argv, env):
     """On a Dask worker: one run-one process (workers are daemonic and may not
     start the tracker processes themselves); raises on failure so Dask retries."""
-    proc = subprocess.run(argv, env=env, stdin=subprocess.DEVNULL, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError("%s exited with %d: %s" % (" ".join(argv[3:]), proc.returncode, _last_line(proc.stderr)))
-    return proc.returncode
+    rc, output = run_task_process(argv, env)
+    if rc != 0:
+        raise RuntimeError("%s exited with %d: %s" % (" ".join(argv[3:]), rc, _last_line(output)))
+    return rc
 
 
 def run_dask(out_dir, jobs, address=None, retries=2, say=print):

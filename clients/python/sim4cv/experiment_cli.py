@@ -5,6 +5,7 @@ sim4cv.tasks_gather. Entered through sim4cv.experiment.main(argv)."""
 
 import argparse
 import os
+import signal
 import sys
 import time
 
@@ -131,7 +132,9 @@ def main(argv=None):
             return _execute(args, exp, command)
         if args.command == "run-one":
             index = args.index if args.index is not None else tasks.index_from_environment()
-            with tasks.TaskEnvironment(index, args.cpus):
+            # SIGTERM (scancel, a Ctrl-C'd executor): unwind, so the run stops its trackers and daemon
+            signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+            with tasks.TaskEnvironment(index, args.cpus, args.out):
                 skipped, error = tasks.run_one(args.out, index, args.daemon)
             print("sim4cv.experiment: task %d %s" % (index, "skipped (done before)" if skipped else
                                                        "failed: " + error if error else "done"), file=sys.stderr)

@@ -213,9 +213,10 @@ class TaskEnvironment:
     colliding: a marker SIM4CV_TASK=<job>-<index>-<pid> inherited by the
     daemon and tracker processes, a TMPDIR of its own (removed at the end),
     and LP_NUM_THREADS (llvmpipe's render threads) from the cores it was
-    given (--cpus, else SLURM_CPUS_PER_TASK), unless already set."""
+    given (--cpus, else SLURM_CPUS_PER_TASK), unless already set.
+    SIM4CV_TASK_DIR names the study's folder (several studies share a node)."""
 
-    def __init__(self, index, cpus=None):
+    def __init__(self, index, cpus=None, out_dir=""):
         import tempfile
         job = os.environ.get("SLURM_ARRAY_JOB_ID") or os.environ.get("SLURM_JOB_ID") or "local"
         self.tag = "%s-%d-%d" % (job, index, os.getpid())
@@ -224,7 +225,7 @@ class TaskEnvironment:
             os.environ.setdefault("LP_NUM_THREADS", str(cpus))
         _remove_stale_folders(tempfile.gettempdir())
         self.tmp = tempfile.mkdtemp(prefix="sim4cv-task-%s-" % self.tag)
-        os.environ.update(SIM4CV_TASK=self.tag, TMPDIR=self.tmp)
+        os.environ.update(SIM4CV_TASK=self.tag, SIM4CV_TASK_DIR=os.path.abspath(out_dir), TMPDIR=self.tmp)
         # removes the folder when this process dies, kill -9 included (it gets SIGTERM then)
         import subprocess
         from .daemon import die_with_parent
