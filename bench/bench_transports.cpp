@@ -1,4 +1,4 @@
-// One latency benchmark for all transports (issue 3): in one run, on the
+// One latency benchmark for all transports: in one run, on the
 // default scene, a lockstep client receives N frames over shared memory, TCP
 // and UDP, at 320x180 and 1280x720 RGB; for each: median/p99/max latency from
 // render end (Frame.render_end_mono_ns) to the client holding the whole frame,
@@ -7,7 +7,7 @@
 // frame's RGB bytes on this machine: the floor. Shared memory runs twice: with
 // the ring carrying only RGB (--shm-channels rgb, what this client reads) and
 // with the default ring of all three channels. The renderer reads the ring's
-// channels straight into its slot (issue 8), so the ring copies nothing; the
+// channels straight into its slot, so the ring copies nothing; the
 // bare cross-process futex wake-up, measured in the same run, is the floor.
 //   sim4cv_bench_transports [--frames N] [--frames-large N]
 #include <sys/mman.h>
@@ -137,7 +137,7 @@ Result OverShm(const std::string& w, const std::string& h, int frames, const std
 // transports: a child process sleeps on a word in shared memory; the parent
 // stamps CLOCK_MONOTONIC, bumps the word and wakes it, as the ring writer
 // does; the child records how long after the stamp it ran. This is what
-// shared-memory delivery cannot go below (issue 8's target: within 3 us of it).
+// shared-memory delivery cannot go below (the target: within 3 us of it).
 // `gap`: how long the reader sleeps before each wake; on a VM a vCPU idle for
 // long is halted by the hypervisor and takes longer to wake, so the floor is
 // measured with the gap between frames of the run it is compared with.

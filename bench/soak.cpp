@@ -1,4 +1,4 @@
-// Soak test (issue 14): N clients (default 8) for a chosen time (default 30
+// Soak test: N clients (default 8) for a chosen time (default 30
 // minutes) connect over TCP, UDP and shared memory, subscribe (lockstep and
 // newest, all channels), configure the world (spawn/remove entities,
 // add/remove cameras, load maps by name) and leave abruptly, some in the

@@ -47,7 +47,5 @@ const Eigen::Vector3f& Pick(const std::array<Eigen::Vector3f, N>& palette, uint3
   return palette[static_cast<std::size_t>(Hash01(variant, stream, salt) * N) % N];
 }
 
-// Number of triangles in a mesh.
-inline std::size_t TriangleCount(const Mesh& mesh) { return mesh.indices.size() / 3; }
 
 }  // namespace sim4cv::render::mapmesh

@@ -1,4 +1,4 @@
-// A daemon safe against bad driving clients (issue 12, "Bad input";
+// A daemon safe against bad driving clients (docs/protocol.md, "Bad input";
 // docs/protocol.md, "Controls"), on the default scene (car 1 drives its
 // lane, heading east, until it gets Controls): Controls with NaN, infinite
 // or out-of-range values are refused and never move the car; a car takes

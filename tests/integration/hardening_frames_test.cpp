@@ -1,4 +1,4 @@
-// Issue 14, finding 5, against the real daemon: lockstep clients that send
+// Found by a hostile-user probe, against the real daemon: lockstep clients that send
 // every Step they may and never read made the daemon render and hold 64
 // frames each, and the frame pool kept that peak after they left. Now a
 // lockstep client that does not read holds the simulation back once

@@ -1,4 +1,4 @@
-// Issue 14, findings 10 and 14, against the real daemon: one client's
+// Found by a hostile-user probe, against the real daemon: one client's
 // pipelined Configures cannot stall the others (at most
 // limits::kMaxOutstandingConfigures unanswered per client, on every
 // transport), and names a client sends are bounded and quoted short, in

@@ -2,7 +2,7 @@
 // once terminated the daemon is an Error and the daemon serves on (finding
 // 1), departed clients' tracker outputs leave State and the run log (finding
 // 6), and a FIFO named by --map, --scene, --replay or --log is refused at
-// start instead of hanging it (finding 7).
+// start instead of hanging it.
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>

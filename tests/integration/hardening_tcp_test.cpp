@@ -1,5 +1,5 @@
 // What a hostile or broken TCP client can make the daemon hold or wait for
-// (issue 14, findings 4, 9, 11, 12 and 13), each sent exactly as found to the
+// (found by a hostile-user probe), each sent exactly as found to the
 // real daemon: memory stays bounded, other clients go on being served, and
 // the offender gets a fatal Error naming the limit and its flag.
 #include <sys/resource.h>

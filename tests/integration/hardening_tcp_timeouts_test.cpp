@@ -1,5 +1,5 @@
 // Connections that hold a slot without finishing anything, and running out
-// of file descriptors (issue 14, findings 12 and 13), against the real
+// of file descriptors (found by a hostile-user probe), against the real
 // daemon: timeouts close such connections with a fatal Error naming the
 // timeout's flag, the accept loop waits instead of spinning, and
 // --max-clients is checked against the descriptor limit at start.

@@ -1,9 +1,9 @@
 // Issue 14 against the real daemon, the world's side: maps over the size
 // limits are refused (over TCP with an Error, with --map at start) and the
-// daemon serves on (findings 1 and 2), and a run log whose records pass
+// daemon serves on, and a run log whose records pass
 // their CRC but hold poses no client could set is refused by --replay at
 // start, naming the record and field, instead of killing the daemon on its
-// first frame (finding 3).
+// first frame.
 #include <fstream>
 #include <limits>
 
@@ -17,7 +17,7 @@ namespace sim4cv::testing {
 namespace {
 
 // An all-road grid of `columns` x `rows` tiles of `tile_size` m with a
-// closed route round its border (the map text of finding 2).
+// closed route round its border (the hostile map text).
 std::string RoadGrid(int columns, int rows, int tile_size = 12) {
   std::string text = "sim4cv-map 1\nname grid\ntile_size " + std::to_string(tile_size) + "\ngrid " +
                      std::to_string(columns) + " " + std::to_string(rows) + "\n";

@@ -1,7 +1,7 @@
 // A TCP connection to the daemon that behaves as a hostile client may: it
 // sends exactly the bytes given, as fast as the socket takes them or one at a
 // time, and reads only when asked. For tests of what a client can make the
-// daemon hold or wait for (issue 14); well-behaved clients use sim4cv::Client.
+// daemon hold or wait for; well-behaved clients use sim4cv::Client.
 #pragma once
 
 #include <arpa/inet.h>

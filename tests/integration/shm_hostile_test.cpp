@@ -1,5 +1,5 @@
-// Hostile shared-memory clients against the real daemon (issue 14, finding
-// 8). Each attack runs in a forked child, the daemon in its own process; after
+// Hostile shared-memory clients against the real daemon. Each attack runs in
+// a forked child, the daemon in its own process; after
 // (or during) each one the daemon is still running, another shm client still
 // gets every frame and its replies within a bound, and a TCP client is
 // unaffected. The attacks: random stores everywhere a client can write

@@ -1,5 +1,5 @@
 """Driving a car by hand from the studio page, and spawning entities and
-setting routes from it (issue 13): Debian's Chromium, headless, through our
+setting routes from it: Debian's Chromium, headless, through our
 DevTools driver (tools/cdp_driver.py), against a real-time sim4cvd on a
 driving test map; a separate Python client checks what the daemon reports.
 Keys are real DevTools key events (Input.dispatchKeyEvent), clicks real

@@ -649,7 +649,7 @@ TEST_F(ClientProtocolTest, GetStatsReportsTheCounters) {
   EXPECT_TRUE(Drain().empty());
 }
 
-// ---- Bounded names and outstanding Configures (issue 14) ------------------
+// ---- Bounded names and outstanding Configures ------------------------------
 
 TEST_F(ClientProtocolTest, OverlongClientNameIsRefusedFatallyWithASmallError) {
   ExpectError(Send(Hello(wire::kProtocolVersion, std::string(1 << 20, 'n'))), proto::ERROR_CODE_INVALID_ARGUMENT, true,

@@ -190,7 +190,7 @@ TEST_F(SimulationTest, AShippedMapLoadsByNameAndAnswersRoadQueries) {
 }
 
 // The sim thread undoes a carried-out request whose graphics it cannot
-// build (finding 1): the world is then exactly the one before it.
+// build: the world is then exactly the one before it.
 TEST_F(SimulationTest, UndoPutsBackTheWorldALoadMapOrAddCameraReplaced) {
   Apply(SpawnUav("scout"));
   const std::size_t entities = sim_.state().entities.size();

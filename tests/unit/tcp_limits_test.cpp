@@ -1,6 +1,6 @@
 // The TCP transport's bounds as units: MessageReader holds only what arrived,
 // ConnectionDeadlines says which timeout expired, OfferedReplies stops at its
-// byte bound with a fatal Error naming it (issue 14, findings 4, 9 and 13).
+// byte bound with a fatal Error naming it.
 #include <gtest/gtest.h>
 
 #include <chrono>

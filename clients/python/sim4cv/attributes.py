@@ -97,18 +97,6 @@ def yaw_of(qw, qx, qy, qz):
                       1.0 - 2.0 * (np.asarray(qy) ** 2 + np.asarray(qz) ** 2))
 
 
-def rotation_matrices(quats):
-    """(N, 3, 3) rotation matrices of (N, 4) unit quaternions w, x, y, z."""
-    q = np.asarray(quats, dtype=float).reshape(-1, 4)
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=1)
-
-
 # ----------------------------------------------------------------------------- per-frame image measures
 
 

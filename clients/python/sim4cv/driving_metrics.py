@@ -16,7 +16,7 @@ Pure functions (numpy), no daemon: tested on hand-computed cases.
 """
 
 import math
-from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Dict, Iterable, List, Sequence, Tuple
 
 import numpy as np
 
@@ -171,13 +171,6 @@ class Progress:
         self.index = i
         self.u = self.lap * self.path.length + self.path.segments[i][0] + s
         return d
-
-
-def first_index_beyond(values: Sequence[float], limit: float) -> Optional[int]:
-    for i, v in enumerate(values):
-        if abs(v) > limit:
-            return i
-    return None
 
 
 # ---------------------------------------------------------------------------

@@ -34,7 +34,6 @@ class Pid {
   }
 
   void Reset() { integral_ = 0.0; }
-  double integral_term() const { return gains_.ki * integral_; }
 
  private:
   PidGains gains_;

@@ -41,7 +41,6 @@ class Quadcopter {
   void Update(double dt);
 
   VehicleState State() const { return body_.StateAt(Eigen::Vector3d::Zero()); }
-  const QuadcopterActuation& last_actuation() const { return actuation_; }
   const QuadcopterParams& params() const { return params_; }
   btRigidBody& body() { return body_.body(); }
 

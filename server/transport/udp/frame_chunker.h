@@ -44,8 +44,6 @@ class FrameChunker {
   uint64_t frame_id() const { return frame_id_; }
   uint32_t chunk_count() const { return chunk_count_; }
   std::size_t total_bytes() const { return total_bytes_; }
-  // Data bytes per chunk; the last chunk may carry fewer.
-  std::size_t payload_bytes() const { return payload_bytes_; }
 
   // Encodes chunk `index` (< chunk_count()): its header into `header`, and
   // into `iov` the header followed by the data slices. Returns the number of
@@ -54,7 +52,7 @@ class FrameChunker {
   std::size_t Build(uint32_t index, Header& header, iovec* iov) const;
 
  private:
-  std::size_t payload_bytes_;
+  std::size_t payload_bytes_;  // data bytes per chunk; the last chunk may carry fewer
   uint64_t frame_id_ = 0;
   uint32_t chunk_count_ = 0;
   std::size_t total_bytes_ = 0;

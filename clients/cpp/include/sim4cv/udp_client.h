@@ -91,8 +91,7 @@ class UdpClient {
 
   // The sequence the next SendEnvelope will use.
   uint64_t next_sequence() const { return next_sequence_; }
-  // How often requests are re-sent while their reply is awaited (default 250 ms).
-  void set_retry_interval(Duration interval) { retry_interval_ = interval; }
+  // How often requests are re-sent while their reply is awaited (250 ms).
   Duration retry_interval() const { return retry_interval_; }
   // Longest silence towards the daemon while waiting (default 1000 ms; the
   // daemon forgets clients after --udp-expiry-ms, 5000 by default).
