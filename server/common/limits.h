@@ -24,7 +24,7 @@ namespace sim4cv::limits {
 // tile_size, metres (the lower bound, 12 m, is map::kMinTileSize: the car's
 // turning circle). Lanes, crosswalks and their meshes are sampled along a
 // tile, so its cost grows with it; a huge tile once sized the ground mesh
-// into bad_alloc (issue 14, finding 1).
+// into bad_alloc (docs/reliability.md, finding 1).
 inline constexpr double kMaxMapTileSize = 50.0;
 // grid W H: tiles each way (the extent below at the smallest tile, 12 m).
 inline constexpr int kMaxMapGridSide = 166;
@@ -35,7 +35,7 @@ inline constexpr double kMaxMapExtentMetres = 2000.0;
 // Road tiles ('#' or a mask): each is up to 12 lane segments, a road mesh
 // and, on urban maps, a junction's lights, crosswalks and their lane
 // crossings (about 10 ms of CPU per crossroads). A 300x300 all-road grid
-// (90,000 road tiles) took 16 s and 2.9 GB (finding 2).
+// (90,000 road tiles) took 16 s and 2.9 GB (docs/reliability.md, finding 2).
 inline constexpr int kMaxMapRoadTiles = 256;
 // 'object' lines: each is a labelled object with its own mesh, drawn by
 // every camera every frame, and checked by the traffic's layout.
@@ -54,7 +54,7 @@ inline constexpr int kMaxMapRouteTiles = 4 * kMaxMapRoadTiles;
 // client's coordinates have (CheckConfigure's "finite": |v| <= 1e6), and an
 // orientation a unit quaternion within kLogQuaternionNormTolerance;
 // anything else (a run whose physics blew up) would reach the renderer's
-// camera maths on the first replayed frame (finding 3). Refused at start.
+// camera maths on the first replayed frame (docs/reliability.md, finding 3). Refused at start.
 inline constexpr double kMaxWorldCoordinate = 1e6;
 inline constexpr double kLogQuaternionNormTolerance = 1e-3;
 
@@ -122,12 +122,12 @@ inline constexpr uint32_t kConfigureBudgetPerFrameMs = 10;
 // Default of --max-message-bytes: the largest Envelope a client may send. The
 // largest legal request is a LoadMap carrying a map's text (at most
 // kMaxMapTextBytes); another MiB holds its Envelope with room to spare, and bounds what one message costs the TCP
-// thread to read, hold and parse (issue 14, finding 11: 64 MiB messages stalled every TCP client). Frames the daemon
+// thread to read, hold and parse (docs/reliability.md, finding 11: 64 MiB messages stalled every TCP client). Frames the daemon
 // sends are not bounded by it.
 inline constexpr uint32_t kDefaultMaxMessageBytes = static_cast<uint32_t>(kMaxMapTextBytes) + (1u << 20);
 // TCP reads a message's body in pieces of at most this many bytes and grows
 // its buffer only by what arrived: a length prefix alone allocates nothing
-// (finding 4), and one handler never reads more than this for one client, so
+// (docs/reliability.md, finding 4), and one handler never reads more than this for one client, so
 // a large message is interleaved with every other client's traffic.
 inline constexpr std::size_t kReadChunkBytes = 64u << 10;
 // A connection's read and reply buffers larger than this are given back once
@@ -136,7 +136,7 @@ inline constexpr std::size_t kKeptBufferBytes = 64u << 10;
 // TCP back-pressure: while the replies waiting to be sent to one client (its
 // own and the sim thread's) exceed this, the daemon reads nothing more from
 // it, so a client that sends requests and never reads stops itself
-// (finding 9) instead of growing the daemon. Not a hard cap: one more reply
+// (docs/reliability.md, finding 9) instead of growing the daemon. Not a hard cap: one more reply
 // (at most a Welcome or a Configured with its WorldInfo) may be queued past it.
 inline constexpr std::size_t kReplyBacklogBytes = 1u << 20;
 // The sim thread's answers waiting for one client's transport thread

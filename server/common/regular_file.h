@@ -2,7 +2,7 @@
 // --replay, --log) or finds in --maps-dir, without ever blocking. By the
 // time they are opened SIGINT and SIGTERM are blocked for sigwait, so an
 // open() that blocks (a FIFO with no one at its other end) would hang the
-// start beyond SIGTERM's reach (issue 14, finding 7). Every such file is
+// start beyond SIGTERM's reach (docs/reliability.md, finding 7). Every such file is
 // opened with O_NONBLOCK and refused unless it is a regular file; the
 // descriptor returned blocks again, as an ordinary file's does.
 #pragma once

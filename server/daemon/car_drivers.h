@@ -1,5 +1,5 @@
 // Who drives which car with Controls, and the timeout that stops a car whose
-// driver went quiet (issue 12, "Bad input"; docs/protocol.md, "Controls").
+// driver went quiet (docs/protocol.md, "Controls").
 // A car takes Controls from one client at a time, so two clients cannot
 // fight over it frame by frame; the first to send Controls owns it until it
 // disconnects, its Controls time out, or the car goes (Remove, Reset,

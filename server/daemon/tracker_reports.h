@@ -1,6 +1,6 @@
 // The trackers' latest reports in State (one per client, ordered by client
 // id, so State and the run log list them the same way every run): what a
-// TrackerOutput updates and a disconnect erases (issue 14, finding 6). A
+// TrackerOutput updates and a disconnect erases (docs/reliability.md, finding 6). A
 // report is checked against the client's camera and the frames rendered
 // first, since a kTrack UAV steers by it (server/sim/track_servo.h).
 #pragma once

@@ -194,7 +194,7 @@ void AddTraffic(Scene& scene, traffic::TrafficConfig config) {
 }
 
 Scene LoadSceneFile(const std::string& path, uint32_t camera_width, uint32_t camera_height) {
-  // A FIFO or device is refused, never waited on (finding 7). Scene files
+  // A FIFO or device is refused, never waited on (docs/reliability.md, finding 7). Scene files
   // are a few KB; the map text bound is as good a bound as any.
   return ParseScene(ReadRegularFile(path, "scene file", limits::kMaxMapTextBytes, "limits::kMaxMapTextBytes"),
                     camera_width, camera_height);

@@ -51,7 +51,7 @@ class HardeningSessionTest : public ConfigureTest {
   }
 };
 
-// Finding 10: 32 KB of pipelined LoadMaps (a thousand of them) used to stop
+// docs/reliability.md, finding 10: 32 KB of pipelined LoadMaps (a thousand of them) used to stop
 // every client's frames for 6-8 s while the sim thread loaded them all
 // before its next frame. Now all but kLimit are refused at once, and a
 // lockstep client stepping meanwhile keeps getting its frames.
@@ -169,7 +169,7 @@ TEST_F(HardeningSessionTest, ClientsThatWaitForEachAnswerAreNeverRefusedOnAnyTra
   shm.Close();
 }
 
-// Finding 14: a Hello's name was logged in full (189 MB of log in 7 s from
+// docs/reliability.md, finding 14: a Hello's name was logged in full (189 MB of log in 7 s from
 // three connections). Now a name over limits::kMaxNameBytes ends the
 // connection with a small Error, and the log does not grow with it.
 TEST_F(HardeningSessionTest, HelloWithAMegabyteNameIsRefusedWithoutFloodingTheLog) {
@@ -201,7 +201,7 @@ TEST_F(HardeningSessionTest, HelloWithAMegabyteNameIsRefusedWithoutFloodingTheLo
   std::cout << "[ measured ] three 1 MB Hello names grew the daemon's log by " << log_growth << " bytes\n";
 }
 
-// Finding 14: a 60 MB camera name came back in a 63 MB Error. Now any
+// docs/reliability.md, finding 14: a 60 MB camera name came back in a 63 MB Error. Now any
 // camera name over the limit is answered in a few hundred bytes.
 TEST_F(HardeningSessionTest, SubscribeWithATenMegabyteCameraNameGetsASmallError) {
   StartDaemon({"--max-message-bytes", std::to_string(64u << 20)});

@@ -1,4 +1,4 @@
-// Issue 14 against the real daemon, the sim thread's side: a LoadMap that
+// The hardening findings (docs/reliability.md) against the real daemon, the sim thread's side: a LoadMap that
 // once terminated the daemon is an Error and the daemon serves on (finding
 // 1), departed clients' tracker outputs leave State and the run log (finding
 // 6), and a FIFO named by --map, --scene, --replay or --log is refused at
@@ -32,7 +32,7 @@ std::string MapWithTileSize(const std::string& tile_size) {
 
 class SimThreadHardeningTest : public ConfigureTest {};
 
-// Finding 1: `tile_size 3e9` made the ground mesh throw std::bad_alloc and
+// docs/reliability.md, finding 1: `tile_size 3e9` made the ground mesh throw std::bad_alloc and
 // `1e300` a non-finite car pose; either left the sim thread and terminated
 // the daemon. Now each is that client's Error (with its request_id), and the
 // world and its frames go on as before.
@@ -52,7 +52,7 @@ TEST_F(SimThreadHardeningTest, LoadMapWithAHugeTileSizeIsAnErrorAndFramesGoOn) {
   EXPECT_EQ(Connect("after")->welcome().scene_name(), scene);
 }
 
-// Finding 6: every client that ever sent a TrackerOutput kept an entry in
+// docs/reliability.md, finding 6: every client that ever sent a TrackerOutput kept an entry in
 // State::tracker_reports, copied into each frame's State and each run-log
 // record. Clients report and leave; the records after they left hold only
 // the client still connected.
@@ -95,7 +95,7 @@ TEST_F(SimThreadHardeningTest, TrackerOutputsOfDepartedClientsAreForgotten) {
                             << stderr_text;
 }
 
-// Finding 7: open() on a FIFO without a writer (or reader) blocked the
+// docs/reliability.md, finding 7: open() on a FIFO without a writer (or reader) blocked the
 // daemon's start with SIGTERM already blocked; now each flag refuses it.
 TEST(FifoArgumentTest, EveryFileFlagRefusesAFifoWithExitStatus2) {
   ScratchDir dir;

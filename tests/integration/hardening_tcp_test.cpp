@@ -80,7 +80,7 @@ class HardeningTcpTest : public DaemonTest {
   }
 };
 
-// Finding 4: a length prefix announcing 64 MiB allocated 64 MiB before any
+// docs/reliability.md, finding 4: a length prefix announcing 64 MiB allocated 64 MiB before any
 // byte of the body came; 8 such connections pinned 512 MiB.
 TEST_F(HardeningTcpTest, LengthPrefixesAloneMakeTheDaemonHoldNothing) {
   StartDaemon({"--max-message-bytes", std::to_string(64 * kMiB)});
@@ -98,7 +98,7 @@ TEST_F(HardeningTcpTest, LengthPrefixesAloneMakeTheDaemonHoldNothing) {
   EXPECT_LT(daemon_->rss_bytes(), before + 16 * kMiB) << "before: " << before;
 }
 
-// Finding 4: memory taken for one large message is given back once it is
+// docs/reliability.md, finding 4: memory taken for one large message is given back once it is
 // handled, while its client stays connected, and when it leaves.
 TEST_F(HardeningTcpTest, ALargeMessagesMemoryIsGivenBackAfterItIsHandled) {
   StartDaemon({"--max-message-bytes", std::to_string(64 * kMiB)});
@@ -124,7 +124,7 @@ TEST_F(HardeningTcpTest, ALargeMessagesMemoryIsGivenBackAfterItIsHandled) {
   EXPECT_LT(returns_near_before(), before + 16 * kMiB) << "before: " << before << "; the client left";
 }
 
-// Finding 9: a 10-byte Configure{GetWorld} is answered with the whole
+// docs/reliability.md, finding 9: a 10-byte Configure{GetWorld} is answered with the whole
 // WorldInfo; pipelined without reading, the answers grew the daemon by 150 MB/s.
 TEST_F(HardeningTcpTest, PipelinedGetWorldWithoutReadingStaysBounded) {
   StartDaemon();
@@ -140,7 +140,7 @@ TEST_F(HardeningTcpTest, PipelinedGetWorldWithoutReadingStaysBounded) {
   ExpectHeldBackOrClosedNamingTheLimit(*flood);
 }
 
-// Finding 9: 13-byte Controls for an entity that is not a car, each answered
+// docs/reliability.md, finding 9: 13-byte Controls for an entity that is not a car, each answered
 // with an Error by the sim thread, grew it by 23 MB/s.
 TEST_F(HardeningTcpTest, PipelinedControlsRefusedBySimThreadWithoutReadingStayBounded) {
   StartDaemon();
@@ -218,7 +218,7 @@ double SlowestStepBeside(uint16_t port, const std::string& bytes, HardeningTcpTe
   return latencies_ms.back();
 }
 
-// Finding 11: 64 MiB messages (the old default limit) were read, parsed and
+// docs/reliability.md, finding 11: 64 MiB messages (the old default limit) were read, parsed and
 // checked on the TCP thread; two senders held another client's Step -> Frame
 // for 2.4 s. Now the prefix alone is refused.
 TEST_F(HardeningTcpTest, MessagesOfTheOldLimitDoNotStallOtherClients) {
@@ -227,7 +227,7 @@ TEST_F(HardeningTcpTest, MessagesOfTheOldLimitDoNotStallOtherClients) {
   EXPECT_LT(slowest, 1000.0) << "generous for a loaded machine; before the fix: 2 to 7 s";
 }
 
-// Finding 11: a message of the largest size the daemon accepts costs the TCP
+// docs/reliability.md, finding 11: a message of the largest size the daemon accepts costs the TCP
 // thread milliseconds, so 4 clients sending them in a loop do not stall others.
 TEST_F(HardeningTcpTest, MaxSizeMessagesDoNotStallOtherClients) {
   const char* override_bytes = std::getenv("SIM4CV_TEST_MAX_MESSAGE_BYTES");  // to measure other sizes

@@ -66,7 +66,7 @@ class HardeningTcpTimeoutsTest : public DaemonTest {
   }
 };
 
-// Finding 13: silent connections held every --max-clients slot for ever.
+// docs/reliability.md, finding 13: silent connections held every --max-clients slot for ever.
 TEST_F(HardeningTcpTimeoutsTest, SilentConnectionsAreClosedAfterTheHandshakeTimeout) {
   StartDaemon({"--max-clients", "4", "--handshake-timeout-ms", "500"});
   std::vector<std::unique_ptr<RawConnection>> silent;
@@ -75,7 +75,7 @@ TEST_F(HardeningTcpTimeoutsTest, SilentConnectionsAreClosedAfterTheHandshakeTime
   ExpectServes();
 }
 
-// Finding 13: a Hello sent one byte at a time never completes in time.
+// docs/reliability.md, finding 13: a Hello sent one byte at a time never completes in time.
 TEST_F(HardeningTcpTimeoutsTest, AHelloTrickledByteByByteIsClosedAfterTheHandshakeTimeout) {
   StartDaemon({"--handshake-timeout-ms", "500", "--message-timeout-ms", "0"});
   auto raw = Raw();
@@ -83,7 +83,7 @@ TEST_F(HardeningTcpTimeoutsTest, AHelloTrickledByteByByteIsClosedAfterTheHandsha
   ExpectClosedNaming(*raw, proto::ERROR_CODE_NOT_HANDSHAKEN, "--handshake-timeout-ms", error);
 }
 
-// Finding 13: once a message has started, it must end within --message-timeout-ms.
+// docs/reliability.md, finding 13: once a message has started, it must end within --message-timeout-ms.
 TEST_F(HardeningTcpTimeoutsTest, AMessageTrickledByteByByteIsClosedAfterTheMessageTimeout) {
   StartDaemon({"--message-timeout-ms", "500"});
   auto raw = Handshaken();
@@ -140,7 +140,7 @@ TEST_F(HardeningTcpTimeoutsTest, AFatalErrorTheClientDoesNotReadStillClosesTheCo
   EXPECT_TRUE(closed) << "the daemon still holds the connection of a client that does not read";
 }
 
-// Finding 12: out of descriptors, accept() failed at once, again and again:
+// docs/reliability.md, finding 12: out of descriptors, accept() failed at once, again and again:
 // 100% CPU and 10 MB/s of warnings.
 TEST_F(HardeningTcpTimeoutsTest, OutOfDescriptorsTheAcceptLoopWaitsInsteadOfSpinning) {
   StartDaemon();
@@ -165,7 +165,7 @@ TEST_F(HardeningTcpTimeoutsTest, OutOfDescriptorsTheAcceptLoopWaitsInsteadOfSpin
   ExpectServes();
 }
 
-// Finding 12: --max-clients 100000 was accepted whatever the descriptor limit.
+// docs/reliability.md, finding 12: --max-clients 100000 was accepted whatever the descriptor limit.
 TEST(DescriptorLimitTest, MaxClientsBeyondTheHardLimitRefusesTheStart) {
   const auto [status, text] = RunToExit({"--max-clients", "1000", "--tcp-port", "0"}, rlimit{200, 200});
   EXPECT_EQ(status, 2) << text;

@@ -1,4 +1,4 @@
-// Issue 14 against the real daemon, the world's side: maps over the size
+// The hardening findings (docs/reliability.md) against the real daemon, the world's side: maps over the size
 // limits are refused (over TCP with an Error, with --map at start) and the
 // daemon serves on, and a run log whose records pass
 // their CRC but hold poses no client could set is refused by --replay at
@@ -35,7 +35,7 @@ std::string RoadGrid(int columns, int rows, int tile_size = 12) {
 
 class WorldHardeningTest : public ConfigureTest {};
 
-// Finding 2: a 300x300 all-road grid (90 KB) took 16 s and 2.9 GB on the sim
+// docs/reliability.md, finding 2: a 300x300 all-road grid (90 KB) took 16 s and 2.9 GB on the sim
 // thread, and 1000x1000 (then the documented maximum) died of bad_alloc.
 // Each is now refused by the parser naming the limit, as is a grid one row
 // over the road-tile limit; a map at the limit loads, and frames go on.
@@ -106,7 +106,7 @@ void WriteLog(const std::string& path, const std::function<void(runlog::FrameLog
   writer.Close();
 }
 
-// Finding 3: records pass their CRC whatever they hold; a non-finite or
+// docs/reliability.md, finding 3: records pass their CRC whatever they hold; a non-finite or
 // absurd pose reached render::LookAt on the first replayed frame, which
 // threw out of the sim thread. Each is now refused at start (exit status 2)
 // naming the record, frame, entity and field.

@@ -2,7 +2,7 @@
 // client's (docs/logs.md, "Replay"): a record passes its CRC whatever pose it
 // holds, and a log from a run whose physics blew up holds non-finite or
 // absurd ones, which would reach the renderer's camera maths on the first
-// replayed frame (issue 14, finding 3).
+// replayed frame (docs/reliability.md, finding 3).
 #pragma once
 
 #include "server/sim/log/replay_track.h"

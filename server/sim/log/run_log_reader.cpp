@@ -45,7 +45,7 @@ uint32_t ReadU32(std::span<const uint8_t> bytes, std::size_t offset) {
 }  // namespace
 
 RunLogReader::RunLogReader(const std::string& path) : path_(path) {
-  // A FIFO or device is refused, never waited on (finding 7).
+  // A FIFO or device is refused, never waited on (docs/reliability.md, finding 7).
   const int fd = OpenRegularFile(path, O_RDONLY, "run log");
   struct stat info {};
   if (::fstat(fd, &info) != 0) {

@@ -26,7 +26,7 @@ int64_t NowUnixNs() {
 RunLogWriter::RunLogWriter(const std::string& path, const RunLogHeader& header, RunLogWriterOptions options)
     // O_APPEND: after a failed write is cut off by ftruncate, the next write
     // lands at the new end, not at the old offset past a hole.
-    // A FIFO or device is refused, never waited on (finding 7).
+    // A FIFO or device is refused, never waited on (docs/reliability.md, finding 7).
     : RunLogWriter(OpenRegularFile(path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND, "run log",
                                    FileKinds::kRegularOrCharacterDevice),
                    path, header, options) {}

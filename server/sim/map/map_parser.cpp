@@ -352,7 +352,7 @@ class Parser {
 Map ParseMap(const std::string& text) { return Parser().Parse(text); }
 
 std::string ReadTextFile(const std::string& path) {
-  // A FIFO or device is refused, never waited on (finding 7).
+  // A FIFO or device is refused, never waited on (docs/reliability.md, finding 7).
   return ReadRegularFile(path, "map file", limits::kMaxMapTextBytes, "limits::kMaxMapTextBytes");
 }
 

@@ -223,7 +223,7 @@ std::vector<TrafficPlan::LaneCrossing> TrafficPlan::FindCrossings(const Eigen::V
     const map::LaneCurve& curve = segment.curve;
     // Every point of a curve lies within its length of its start: a cheap
     // test that skips the far segments before the exact one (trigonometry),
-    // so a large map's plan is not dominated by this loop (issue 14, finding 2).
+    // so a large map's plan is not dominated by this loop (docs/reliability.md, finding 2).
     const Eigen::Vector2d mid = (start + end) / 2;
     if ((curve.pieces().front().start - mid).norm() - curve.length() > length + 1.0) continue;
     if (curve.Project(mid).distance > length + 1.0) continue;  // nowhere near

@@ -1,4 +1,4 @@
-// When a TCP connection has waited too long (issue 14, finding 13): a Hello
+// When a TCP connection has waited too long (docs/reliability.md, finding 13): a Hello
 // must arrive complete within --handshake-timeout-ms of connecting, a message
 // that has started must end within --message-timeout-ms, and, if
 // --idle-timeout-ms is set, a handshaken connection must not go that long

@@ -1,6 +1,6 @@
 // Each TCP connection takes a file descriptor: checked at start against the
 // process's limit (RLIMIT_NOFILE), so --max-clients cannot promise more
-// connections than the daemon can accept (issue 14, finding 12).
+// connections than the daemon can accept (docs/reliability.md, finding 12).
 #pragma once
 
 #include <cstdint>

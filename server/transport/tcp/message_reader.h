@@ -2,7 +2,7 @@
 // the pieces the socket delivers. Memory follows what arrived, never what a
 // prefix announced: a 4-byte prefix alone allocates nothing, and the body
 // grows at most one read piece (limits::kReadChunkBytes) ahead of the bytes
-// received (issue 14, finding 4). A body buffer grown past
+// received (docs/reliability.md, finding 4). A body buffer grown past
 // limits::kKeptBufferBytes is given back when the next message starts.
 // No I/O here: the TCP session asks where to read to and says how much came.
 #pragma once
