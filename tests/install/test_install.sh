@@ -112,7 +112,10 @@ if command -v octave > /dev/null; then
   OCTAVE_PACKAGE=$(ls "$PREFIX"/share/sim4cv/octave/sim4cv-*.tar.gz) || fail "no Octave package installed"
   mkdir -p octave
   start_daemon "$PREFIX/bin/sim4cvd"
-  OUTPUT=$(HOME=$WORK octave --no-gui --no-window-system --quiet --no-history --eval "
+  # Octave's package lists go to a HOME of its own; the daemon wrote its access token under the
+  # real one, so the token travels in SIM4CV_TOKEN, as for any client that cannot read the file.
+  TOKEN=$(cat "${XDG_RUNTIME_DIR:-$HOME/.cache}/sim4cv/tcp-$(field tcp).token") || fail "no access token file for the daemon"
+  OUTPUT=$(SIM4CV_TOKEN=$TOKEN HOME=$WORK octave --no-gui --no-window-system --quiet --no-history --eval "
     pkg prefix $WORK/octave/packages $WORK/octave/packages; pkg local_list $WORK/octave/octave_packages;
     pkg install $OCTAVE_PACKAGE; ADDRESS = 'tcp://127.0.0.1:$(field tcp)'; source('$SOURCE/tests/install/get_frame.m');" 2>&1) ||
     fail "the Octave package got no frame: $OUTPUT"

@@ -39,7 +39,7 @@ def test_hostile_names_show_as_text_and_run_nothing(studio_daemon):
         uav = client.spawn("uav", UAV, 5.0, 5.0, 10.0)
         client.add_camera(CAMERA, mounted_on=UAV)
         with Browser() as browser, clean_page(
-                browser, "http://127.0.0.1:%d/?view=%s:rgb" % (daemon.http, urllib.request.quote(CAMERA)),
+                browser, "http://127.0.0.1:%d/?view=%s:rgb&token=%s" % (daemon.http, urllib.request.quote(CAMERA), daemon.token),
                 "window.studio && studio.ready && studio.views.length === 1") as page:
             page.wait_for("document.querySelectorAll('#uav-target option').length >= 2", TIMEOUT_S)
             page.wait_for("document.querySelectorAll('#view-0 select.camera option').length >= 1", TIMEOUT_S)
@@ -62,7 +62,7 @@ def test_daemon_forbids_inline_script(studio_daemon):
         policy = answer.headers["Content-Security-Policy"]
     assert policy is not None and "script-src 'self'" in policy and "unsafe-inline" not in policy.split("style-src")[0]
     with Browser() as browser:
-        page = browser.new_page("http://127.0.0.1:%d/" % daemon.http)
+        page = browser.new_page("http://127.0.0.1:%d/?token=%s" % (daemon.http, daemon.token))
         page.wait_for("window.studio && studio.ready", TIMEOUT_S)
         page.evaluate("""(() => { const s = document.createElement("script"); s.textContent = "window.ran_inline = 1";
                                   document.body.append(s);
