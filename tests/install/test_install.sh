@@ -117,6 +117,7 @@ if command -v octave > /dev/null; then
   TOKEN=$(cat "${XDG_RUNTIME_DIR:-$HOME/.cache}/sim4cv/tcp-$(field tcp).token") || fail "no access token file for the daemon"
   OUTPUT=$(SIM4CV_TOKEN=$TOKEN HOME=$WORK octave --no-gui --no-window-system --quiet --no-history --eval "
     pkg prefix $WORK/octave/packages $WORK/octave/packages; pkg local_list $WORK/octave/octave_packages;
+    pkg global_list $WORK/octave/global_packages;
     pkg install $OCTAVE_PACKAGE; ADDRESS = 'tcp://127.0.0.1:$(field tcp)'; source('$SOURCE/tests/install/get_frame.m');" 2>&1) ||
     fail "the Octave package got no frame: $OUTPUT"
   OUTPUT=$(grep '^frame ' <<< "$OUTPUT" || true)
