@@ -21,6 +21,9 @@ import sys
 import tempfile
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "clients", "python"))
+from sim4cv.proctree import environments  # noqa: E402
+
 
 def free_port():
     with socket.socket() as s:
@@ -132,16 +135,8 @@ class LocalSlurm:
 
     def _cluster_processes(self):
         """PIDs whose environment holds this cluster's SLURM_CONF (slurmstepd and job processes)."""
-        marker = ("SLURM_CONF=" + self.conf).encode() + b"\0"
-        pids = []
-        for pid in filter(str.isdigit, os.listdir("/proc")):
-            try:
-                with open("/proc/%s/environ" % pid, "rb") as f:
-                    if marker in f.read() and int(pid) != os.getpid():
-                        pids.append(int(pid))
-            except OSError:
-                continue
-        return pids
+        marker = ("SLURM_CONF=" + self.conf).encode()
+        return [pid for pid, environment in environments() if marker in environment and pid != os.getpid()]
 
     def __exit__(self, *exc):
         self.stop()

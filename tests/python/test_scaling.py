@@ -19,6 +19,7 @@ import pytest
 REPO_ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.join(REPO_ROOT, "clients", "python"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sim4cv.proctree import environments  # noqa: E402
 
 SWEEP = os.path.join(REPO_ROOT, "tests", "python", "scaling_sweep.yaml")
 ENV = dict(os.environ, PYTHONPATH=os.path.join(REPO_ROOT, "clients", "python"))
@@ -81,17 +82,9 @@ def task_processes(out_dir):
 def marked_processes(marker, out_dir):
     """PIDs whose environment holds SIM4CV_TASK=<marker...> and SIM4CV_TASK_DIR=out_dir
     (other tests' studies may run beside)."""
-    found = []
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            with open("/proc/%s/environ" % pid, "rb") as f:
-                environ = f.read()
-            if ("\0SIM4CV_TASK=" + marker).encode() in b"\0" + environ and \
-                    ("\0SIM4CV_TASK_DIR=%s\0" % out_dir).encode() in b"\0" + environ + b"\0":
-                found.append(int(pid))
-        except OSError:
-            continue
-    return found
+    task, folder = ("SIM4CV_TASK=" + marker).encode(), ("SIM4CV_TASK_DIR=%s" % out_dir).encode()
+    return [pid for pid, environment in environments()
+            if folder in environment and any(entry.startswith(task) for entry in environment)]
 
 
 def comm(pid):

@@ -42,12 +42,15 @@ def _parent(pid):
         return None
 
 
-def _has_token(pid, needle):
-    try:
-        with open("/proc/%d/environ" % pid, "rb") as f:
-            return needle in f.read().split(b"\0")
-    except OSError:  # gone, or not ours to read
-        return False
+def environments():
+    """(pid, its environment as a list of b"NAME=VALUE") for every process whose
+    environment this one may read (others' and vanished ones are left out)."""
+    for pid in _pids():
+        try:
+            with open("/proc/%d/environ" % pid, "rb") as f:
+                yield pid, f.read().split(b"\0")
+        except OSError:  # gone, or not ours to read
+            continue
 
 
 def descendants(root, token=None):
@@ -67,7 +70,7 @@ def descendants(root, token=None):
     if token:
         needle = ("%s=%s" % (TOKEN_VARIABLE, token)).encode()
         me = os.getpid()
-        found.update(pid for pid in pids if pid not in (me, root) and _has_token(pid, needle))
+        found.update(pid for pid, environment in environments() if pid not in (me, root) and needle in environment)
     found.discard(root)
     return found
 
