@@ -161,7 +161,7 @@ int main(int argc, char** argv) {
               steps, physics_seconds, steps / physics_seconds, steps * kDt / physics_seconds);
   std::printf("physics (car + 4 UAVs, 240 Hz): real-time factor %.0fx\n", CarAndFourUavsRealTimeFactor(scene, steps));
 
-  auto gl = render::CreateOsMesaContext();
+  auto gl = render::CreateGlContext();
   gl->MakeCurrent();
   render::SceneGraphics graphics(scene);
   render::Renderer renderer(graphics.meshes(), width, height);

@@ -71,7 +71,7 @@ int main(int argc, char** argv) try {
   const sim::State before = state;
   for (int i = 0; i < kFrameSteps; ++i) world.Step(state, 1.0 / 240.0);
 
-  auto gl = render::CreateOsMesaContext();
+  auto gl = render::CreateGlContext();
   gl->MakeCurrent();
   render::SceneGraphics graphics(scene);
   graphics.Update(before);

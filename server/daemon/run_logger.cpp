@@ -15,7 +15,7 @@ static_assert(sim::InfoOf(sim::EntityKind::kCar).log_class == runlog::kObjectCla
                   sim::InfoOf(sim::EntityKind::kPedestrian).log_class == runlog::kObjectClassPedestrian,
               "the entity kinds' run-log classes (sim/entity_kinds.h) are the log format's");
 
-uint16_t ObjectClassOf(sim::EntityKind kind) { return sim::InfoOf(kind).log_class; }
+uint16_t LogClassOf(sim::EntityKind kind) { return sim::InfoOf(kind).log_class; }
 
 runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, const sim::State& initial) {
   runlog::RunLogHeader header;
@@ -38,7 +38,7 @@ runlog::RunLogHeader MakeHeader(const Config& config, const sim::Scene& scene, c
   // The entities and cameras at the start; records hold every entity
   // present at their frame, so ones spawned later appear there by id.
   for (const sim::Entity& entity : initial.entities) {
-    header.entities.push_back({entity.id, entity.name, static_cast<uint16_t>(entity.kind), ObjectClassOf(entity.kind)});
+    header.entities.push_back({entity.id, entity.name, static_cast<uint16_t>(entity.kind), LogClassOf(entity.kind)});
   }
   // Traffic (docs/maps.md, "Traffic"): every moving car and walker, so that
   // a replay shows it where it was.

@@ -66,7 +66,7 @@ void SimThread::Start() {
   thread_ = std::thread([this, &ready] {
     try {
       // OSMesa contexts are current per thread, so everything GL is made here.
-      gl_ = render::CreateOsMesaContext();
+      gl_ = render::CreateGlContext();
       gl_->MakeCurrent();
       renderer_name_ = gl_->RendererName();
       BuildGraphics();

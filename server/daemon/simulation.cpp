@@ -9,7 +9,7 @@
 #include "server/common/quoted.h"
 #include "server/daemon/named_files.h"
 #include "server/daemon/run_logger.h"
-#include "server/session/effects_wire.h"
+#include "server/wire/effects_wire.h"
 #include "server/sim/map/map_text.h"
 
 namespace sim4cv::daemon {
@@ -271,7 +271,7 @@ const sim::Entity& Simulation::EntityOf(uint32_t id, const char* what) const {
 
 uint32_t Simulation::Spawn(const proto::Spawn& spawn) {
   sim::SpawnPose pose{{spawn.position().x(), spawn.position().y(), spawn.position().z()}, spawn.yaw_deg() * kDegrees};
-  // CheckConfigure let only the table's kinds through (session/entity_kinds_wire.h).
+  // CheckConfigure let only the table's kinds through (wire/entity_kinds_wire.h).
   const auto kind = static_cast<sim::EntityKind>(spawn.kind());
   if (spawn.snap_to_lane() && kind == sim::EntityKind::kCar) {
     if (!scene_->road_graph) {
@@ -518,7 +518,7 @@ void Simulation::SetConditions(const proto::SetConditions& request, Change& chan
 // the coefficients already in force too, so it is checked here.
 void Simulation::SetEffects(const proto::CameraEffects& request, Change& change) {
   effects::CameraEffects next = effects_;
-  session::ApplyEffects(request, next);
+  wire::ApplyEffects(request, next);
   const std::string problem = effects::CheckLens(next);  // each field's range was checked on arrival
   if (!problem.empty()) throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, problem);
   effects_ = next;
@@ -558,7 +558,7 @@ void Simulation::FillWorldInfo(proto::WorldInfo& out) const {
   look.set_randomize_every_frames(randomize_every_);
   look.set_noise_read(conditions_.noise_read);
   look.set_noise_shot(conditions_.noise_shot);
-  session::FillEffects(effects_, *out.mutable_effects());
+  wire::FillEffects(effects_, *out.mutable_effects());
 }
 
 }  // namespace sim4cv::daemon

@@ -1,11 +1,11 @@
 #include "server/daemon/state_message.h"
 
-#include "server/session/proto_math.h"
+#include "server/wire/proto_math.h"
 
 namespace sim4cv::daemon {
 
-using session::SetQuaternion;
-using session::SetVec3;
+using wire::SetQuaternion;
+using wire::SetVec3;
 
 void FillStateMessage(const sim::State& state, proto::State& out) {
   out.set_frame_id(state.frame_id);

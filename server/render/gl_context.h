@@ -17,8 +17,10 @@ class GlContext {
   virtual std::string RendererName() const = 0;
 };
 
-// An OpenGL 3.3+ core-profile OSMesa context (software, offscreen). Throws
-// std::runtime_error if OSMesa cannot create one.
-std::unique_ptr<GlContext> CreateOsMesaContext();
+// An OpenGL 3.3+ core-profile offscreen context from the backend this build
+// uses (OSMesa's llvmpipe today, osmesa_context.cpp; an EGL backend would
+// define this function in its own file instead). Throws std::runtime_error
+// if the backend cannot create one.
+std::unique_ptr<GlContext> CreateGlContext();
 
 }  // namespace sim4cv::render

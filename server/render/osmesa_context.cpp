@@ -58,6 +58,6 @@ class OsMesaContext final : public GlContext {
 
 }  // namespace
 
-std::unique_ptr<GlContext> CreateOsMesaContext() { return std::make_unique<OsMesaContext>(); }
+std::unique_ptr<GlContext> CreateGlContext() { return std::make_unique<OsMesaContext>(); }
 
 }  // namespace sim4cv::render

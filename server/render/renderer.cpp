@@ -15,7 +15,7 @@
 #include "server/render/channel_program.h"
 #include "server/render/effects_pass.h"
 #include "server/render/gl_program.h"
-#include "server/render/jpeg.h"
+#include "server/codec/jpeg.h"
 #include "server/render/lens.h"
 #include "server/render/render_targets.h"
 #include "server/render/shadow_map.h"
@@ -121,7 +121,7 @@ struct Renderer::Impl {
   std::unique_ptr<SkyPass> sky;
   // Made the first time a camera has effects (effects_pass.h, jpeg.h).
   std::unique_ptr<EffectsPass> effects;
-  std::unique_ptr<JpegRoundTrip> jpeg;
+  std::unique_ptr<codec::JpegRoundTrip> jpeg;
   // Scratch for a lensed view's visibility: the undistorted mask and, per
   // instance, its pixels there and in the distorted mask.
   std::vector<uint16_t> scene_mask;
@@ -530,7 +530,7 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   }
   gl.ReadBack(camera, out, through);
   if (camera.effects.jpeg_quality > 0 && out[kRgbPlane] != nullptr) {
-    if (!gl.jpeg) gl.jpeg = std::make_unique<JpegRoundTrip>();
+    if (!gl.jpeg) gl.jpeg = std::make_unique<codec::JpegRoundTrip>();
     gl.jpeg->Apply(out[kRgbPlane], camera.width, camera.height, static_cast<int>(camera.effects.jpeg_quality));
   }
   if (!unoccluded_pixels.empty() && planes != 0) {

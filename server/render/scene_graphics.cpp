@@ -11,10 +11,8 @@
 #include "server/render/mesh_builder.h"
 #include "server/render/object_meshes.h"
 #include "server/render/traffic_meshes.h"
-#include "server/session/entity_kinds_wire.h"
-#include "server/sim/vehicles/car.h"
+#include "server/wire/entity_kinds_wire.h"
 #include "server/sim/vehicles/gimbal.h"
-#include "server/sim/world.h"
 #include "sim4cv.pb.h"
 
 namespace sim4cv::render {
@@ -85,7 +83,7 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     };
     traffic_ =
         std::make_unique<TrafficGraphics>(*scene.traffic, ids, scene.car.params.chassis_half_extents,
-                                          vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh, add_item);
+                                          vehicles::BoxCentreHeightAtRest(scene.car.params), add_mesh, add_item);
   }
   static_item_count_ = items_.size();
   for (DrawItem& item : items_) {
@@ -126,7 +124,7 @@ void SceneGraphics::Update(const sim::State& state) {
     // inside; a pedestrian's body stands on its feet, its box half its height up.
     Eigen::Vector3d box_centre = entity.body.position, half_extents;
     MeshId mesh = 0;
-    const uint32_t object_class = session::ObjectClassOf(entity.kind);
+    const uint32_t object_class = wire::ObjectClassOf(entity.kind);
     switch (entity.kind) {
       case sim::EntityKind::kCar:
         mesh = entity.id == sim::kCarEntityId ? target_car_mesh_ : car_mesh_;

@@ -8,8 +8,8 @@
 #include "protocol/conditions.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
-#include "server/session/effects_wire.h"
-#include "server/session/entity_kinds_wire.h"
+#include "server/wire/effects_wire.h"
+#include "server/wire/entity_kinds_wire.h"
 
 namespace sim4cv::session {
 namespace {
@@ -157,7 +157,7 @@ std::string CheckGenerateMap(const proto::GenerateMap& generate) {
 std::string CheckSpawn(const proto::Spawn& spawn) {
   return Checker()
       .True(sim::FindEntityKind(spawn.kind()) != nullptr,
-            "Spawn.kind is " + std::to_string(spawn.kind()) + "; use " + EntityKindChoices())
+            "Spawn.kind is " + std::to_string(spawn.kind()) + "; use " + wire::EntityKindChoices())
       .Name("Spawn.name", spawn.name(), true)
       .Vec("Spawn.position", spawn.position())
       .Finite("Spawn.yaw_deg", spawn.yaw_deg())
@@ -269,7 +269,7 @@ std::string CheckSetConditions(const proto::SetConditions& request) {
 // coefficients in force too, so the sim thread says (Simulation::SetEffects).
 std::string CheckSetEffects(const proto::CameraEffects& request) {
   effects::CameraEffects asked;
-  ApplyEffects(request, asked);
+  wire::ApplyEffects(request, asked);
   return effects::CheckRanges(asked, false);
 }
 

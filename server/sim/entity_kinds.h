@@ -1,6 +1,6 @@
 // The kinds of entity (a thing that moves in the world: the target car, a
 // UAV, a pedestrian), listed once. The protocol's EntityKind and ObjectClass
-// (server/session/entity_kinds_wire.h asserts they agree), the World's names
+// (server/wire/entity_kinds_wire.h asserts they agree), the World's names
 // for them, the run log's object classes and the Configure checks all read
 // this table; adding a kind is one line here plus its behaviour (its vehicle
 // in World, its mesh in SceneGraphics).

@@ -12,8 +12,8 @@
 #include "server/sim/map/road_graph.h"
 #include "server/sim/traffic/traffic_ids.h"
 #include "server/sim/traffic/traffic_plan.h"
-#include "server/sim/vehicles/car.h"
-#include "server/sim/vehicles/quadcopter.h"
+#include "server/sim/vehicles/car_params.h"
+#include "server/sim/vehicles/quadcopter_params.h"
 
 namespace sim4cv::sim {
 
@@ -21,6 +21,10 @@ namespace sim4cv::sim {
 inline constexpr uint32_t kCarEntityId = 1;
 inline constexpr uint32_t kUavEntityId = 2;
 inline constexpr uint32_t kFirstBuildingId = 100;
+// Entities take ids below the first static object's (kFirstBuildingId), so the
+// mask's instance ids stay unique: at most this many at once.
+inline constexpr uint32_t kMaxEntityId = kFirstBuildingId - 1;
+
 
 struct BuildingSpec {
   uint32_t id = 0;                  // instance id in the mask

@@ -25,10 +25,6 @@ class ReplayTrack;
 
 namespace sim4cv::sim {
 
-// Entities take ids below the first static object's (kFirstBuildingId), so the
-// mask's instance ids stay unique: at most this many at once.
-inline constexpr uint32_t kMaxEntityId = kFirstBuildingId - 1;
-
 // Where to place a new entity: on the ground (cars) or in the air (UAVs).
 struct SpawnPose {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m; cars ignore z (they stand on the ground)

@@ -7,7 +7,7 @@
 
 #include "protocol/framing.h"
 #include "server/common/check.h"
-#include "server/session/proto_math.h"
+#include "server/wire/proto_math.h"
 
 namespace sim4cv::transport {
 namespace {
@@ -44,8 +44,8 @@ void FillImageHeader(const channels::ChannelInfo& info, uint32_t width, proto::I
   image.set_components(info.components);
 }
 
-using session::SetQuaternion;
-using session::SetVec3;
+using wire::SetQuaternion;
+using wire::SetVec3;
 
 void FillCamera(const render::CameraIntrinsics& intrinsics, const render::Pose& pose, proto::Frame& meta) {
   proto::CameraIntrinsics& out = *meta.mutable_camera_intrinsics();

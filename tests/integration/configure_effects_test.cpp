@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "server/session/effects_wire.h"
+#include "server/wire/effects_wire.h"
 #include "tests/integration/run_to_exit.h"
 #include "tests/support/configure_fixture.h"
 
@@ -89,7 +89,7 @@ TEST_F(EffectsTest, EveryEffectKeepsBoxesTheTightBoxesOfTheMaskAndRgbEffectsChan
     SCOPED_TRACE(name);
     client->Reset();
     proto::CameraEffects off;  // every field back to its default
-    session::FillEffects(effects::CameraEffects{}, off);
+    wire::FillEffects(effects::CameraEffects{}, off);
     client->SetEffects(off);
     const proto::WorldInfo world = client->SetEffects(Each(name));
     const proto::Frame frame = StepFrames(*client, 45);

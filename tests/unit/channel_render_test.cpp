@@ -60,7 +60,7 @@ DrawItem Item(MeshId mesh, const Eigen::Vector3f& position, float yaw = 0.0f) {
 class ChannelRenderTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    context_ = CreateOsMesaContext();
+    context_ = CreateGlContext();
     renderer_ = std::make_unique<Renderer>(
         std::vector<Mesh>{Labelled(MakeBox({0.05f, 20.0f, 20.0f}, {0.5f, 0.5f, 0.5f}), 2),
                           Labelled(MakeBox({0.5f, 0.5f, 0.5f}, {0.8f, 0.2f, 0.1f}), kCarClass)},

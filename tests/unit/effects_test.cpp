@@ -24,7 +24,7 @@
 #include "server/render/projection.h"
 #include "server/render/renderer.h"
 #include "server/render/scene_graphics.h"
-#include "server/session/effects_wire.h"
+#include "server/wire/effects_wire.h"
 #include "server/sim/world.h"
 #include "tests/support/no_warnings.h"
 #include "tests/support/rendered_frame.h"
@@ -49,13 +49,13 @@ TEST(EffectsTableTest, EveryEffectIsOffByDefaultAndHasItsProtoField) {
     value = std::fmod(value + 0.1, 0.5);
   }
   proto::CameraEffects message;
-  session::FillEffects(all, message);  // DEMANDs a proto field per entry
+  wire::FillEffects(all, message);  // DEMANDs a proto field per entry
   effects::CameraEffects back;
-  session::ApplyEffects(message, back);
+  wire::ApplyEffects(message, back);
   EXPECT_EQ(back, all);
   proto::CameraEffects only_blur;
   only_blur.set_motion_blur(0.5);
-  session::ApplyEffects(only_blur, back);
+  wire::ApplyEffects(only_blur, back);
   EXPECT_EQ(back.motion_blur, 0.5);
   EXPECT_EQ(back.k1, all.k1) << "fields left out keep their value";
 }

@@ -250,7 +250,7 @@ void SavePng(const Frame& frame, const std::string& path) {
 
 class MapRenderTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { context_ = CreateOsMesaContext(); }
+  static void SetUpTestSuite() { context_ = CreateGlContext(); }
   static void TearDownTestSuite() { context_.reset(); }
   static std::unique_ptr<GlContext> context_;
 };

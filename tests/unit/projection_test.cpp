@@ -149,7 +149,7 @@ TEST(BoxProjector, ToPixelAgreesWithTheRenderersProjection) {
 // The projected box of an unoccluded box mesh is its silhouette's bounding
 // box: the rendered tight box lies inside it and reaches within a pixel of it.
 TEST(BoxProjector, MatchesTheRenderedSilhouette) {
-  auto context = CreateOsMesaContext();
+  auto context = CreateGlContext();
   const Eigen::Vector3d half(1.5, 0.8, 0.6);
   Renderer renderer({MakeBox(half.cast<float>(), {0.8f, 0.2f, 0.1f})}, kWidth, kHeight);
   CameraView view = ForwardCamera();

@@ -46,7 +46,7 @@ DrawItem Item(MeshId mesh, const Eigen::Vector3f& position, InstanceId instance)
 class RendererTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    context_ = CreateOsMesaContext();
+    context_ = CreateGlContext();
     renderer_ = std::make_unique<Renderer>(
         std::vector<Mesh>{MakeBox({0.5f, 0.5f, 0.5f}, {0.8f, 0.2f, 0.1f}), MakeCarMesh(4.0f, 1.8f, 1.5f, {0.1f, 0.3f, 0.8f})},
         kWidth, kHeight);

@@ -47,7 +47,7 @@ TEST(SemanticClassesTest, CityscapesTrainIdsAndPaletteWhereCityscapesHasTheClass
 
 // Renders `scene`'s items from `camera` with the semantic channel and counts the classes.
 std::map<int, uint32_t> ClassesSeen(const sim::Scene& scene, const CameraView& camera) {
-  const auto context = CreateOsMesaContext();
+  const auto context = CreateGlContext();
   SceneGraphics graphics(scene);
   const sim::World world(scene);
   graphics.Update(world.InitialState());

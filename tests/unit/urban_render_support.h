@@ -33,7 +33,7 @@ class UrbanRenderTest : public ::testing::Test {
     world_ = std::make_unique<sim::World>(*scene_);
     state_ = std::make_unique<sim::State>(world_->InitialState());
     for (int i = 0; i < 480; ++i) world_->Step(*state_, 1.0 / 240.0);
-    context_ = render::CreateOsMesaContext();
+    context_ = render::CreateGlContext();
     graphics_ = std::make_unique<render::SceneGraphics>(*scene_);
     graphics_->Update(*state_);
     renderer_ = std::make_unique<Renderer>(graphics_->meshes(), kWidth, kHeight);

@@ -9,9 +9,7 @@
 namespace sim4cv::vehicles {
 namespace {
 
-constexpr double kGravity = 9.81;
 constexpr double kDegToRad = std::numbers::pi / 180.0;
-constexpr int kWheelCount = 4;
 constexpr bool IsFront(int wheel) { return wheel < 2; }
 constexpr bool IsLeft(int wheel) { return wheel % 2 == 0; }
 
@@ -56,13 +54,6 @@ btRaycastVehicle::btVehicleTuning Tuning(const CarParams& p) {
   return tuning;
 }
 
-// Suspension length with the car at rest on flat ground: each wheel carries a
-// quarter of the weight and Bullet's spring force per wheel is
-// stiffness * compression * chassis mass.
-double StaticSuspensionLength(const CarParams& p) {
-  return p.suspension_rest_length - kGravity / (kWheelCount * p.suspension_stiffness);
-}
-
 void CheckParams(const CarParams& p) {
   SIM4CV_THROW_UNLESS(p.mass > 0, "car mass " << p.mass << " must be > 0");
   SIM4CV_THROW_UNLESS(p.suspension_stiffness > 0, "suspension stiffness " << p.suspension_stiffness << " must be > 0");
@@ -103,12 +94,6 @@ Car::Car(btDiscreteDynamicsWorld& world, const CarParams& params, const Eigen::V
     info.m_rollInfluence = btScalar(params_.roll_influence);
   }
   Reset(position, yaw, ground_z);
-}
-
-double Car::BoxCentreHeightAtRest(const CarParams& params) {
-  // Wheel radius + static suspension length above the ground, plus the
-  // depth of the suspension tops below the box centre.
-  return params.wheel_radius + StaticSuspensionLength(params) - params.suspension_top_z;
 }
 
 btTransform Car::SpawnPose(const Eigen::Vector2d& position, double yaw, double ground_z) const {

@@ -10,18 +10,10 @@
 
 #include "server/sim/vehicles/bullet_body.h"
 #include "server/sim/vehicles/quadcopter_controller.h"
+#include "server/sim/vehicles/quadcopter_params.h"
 #include "server/sim/vehicles/vehicle_state.h"
 
 namespace sim4cv::vehicles {
-
-struct QuadcopterParams {
-  double mass = 1.5;                             // kg
-  Eigen::Vector3d half_extents{0.3, 0.3, 0.05};  // m (0.6 m span, 0.1 m tall box)
-  double linear_damping = 0.1;                   // Bullet's: velocity *= (1 - d)^dt, i.e. drag ~0.105/s
-  double angular_damping = 0.2;                  // Bullet's, on the angular velocity
-  double max_thrust = 2.5 * 1.5 * 9.81;          // N (thrust-to-weight 2.5)
-  Eigen::Vector3d max_torque{2.0, 2.0, 0.5};     // N m about body x, y, z
-};
 
 class Quadcopter {
  public:

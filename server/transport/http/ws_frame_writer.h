@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "server/render/jpeg.h"
+#include "server/codec/jpeg.h"
 #include "server/session/client_session.h"
 #include "server/session/frame.h"
 #include "sim4cv.pb.h"
@@ -43,7 +43,7 @@ class WsFrameWriter {
  private:
   proto::Envelope envelope_;  // reused
   std::string header_;
-  render::JpegEncoder jpeg_;
+  codec::JpegEncoder jpeg_;
   std::vector<boost::asio::const_buffer> binary_;
   std::size_t binary_bytes_ = 0;
 };

@@ -8,7 +8,7 @@
 #include "server/sim/entity_kinds.h"
 #include "sim4cv.pb.h"
 
-namespace sim4cv::session {
+namespace sim4cv::wire {
 
 #define SIM4CV_ENTITY_KIND_WIRE_CHECK(NAME, VALUE, WIRE, ...)                                             \
   static_assert(static_cast<int>(sim::EntityKind::k##NAME) == proto::ENTITY_KIND_##WIRE,                  \
@@ -40,4 +40,4 @@ inline std::string EntityKindChoices() {
   return text;
 }
 
-}  // namespace sim4cv::session
+}  // namespace sim4cv::wire

@@ -10,7 +10,7 @@
 #include "server/common/check.h"
 #include "sim4cv.pb.h"
 
-namespace sim4cv::session {
+namespace sim4cv::wire {
 
 // Sets the effects the message carries (fields present); the rest stay.
 inline void ApplyEffects(const proto::CameraEffects& message, effects::CameraEffects& out) {
@@ -32,4 +32,4 @@ inline void FillEffects(const effects::CameraEffects& effects, proto::CameraEffe
   }
 }
 
-}  // namespace sim4cv::session
+}  // namespace sim4cv::wire

@@ -7,7 +7,7 @@
 
 #include "sim4cv.pb.h"
 
-namespace sim4cv::session {
+namespace sim4cv::wire {
 
 inline void SetVec3(const Eigen::Vector3d& v, proto::Vec3& out) {
   out.set_x(v.x());
@@ -22,4 +22,4 @@ inline void SetQuaternion(const Eigen::Quaterniond& q, proto::Quaternion& out) {
   out.set_z(q.z());
 }
 
-}  // namespace sim4cv::session
+}  // namespace sim4cv::wire

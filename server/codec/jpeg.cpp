@@ -1,4 +1,4 @@
-#include "server/render/jpeg.h"
+#include "server/codec/jpeg.h"
 
 // clang-format off
 #include <cstdio>  // before jpeglib.h, which needs FILE declared
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace sim4cv::render {
+namespace sim4cv::codec {
 namespace {
 
 // libjpeg reports errors by calling error_exit, which must not return; a C++
@@ -87,4 +87,4 @@ void JpegRoundTrip::Apply(uint8_t* rgb, uint32_t width, uint32_t height, int qua
   jpeg_destroy_decompress(&decoder);
 }
 
-}  // namespace sim4cv::render
+}  // namespace sim4cv::codec

@@ -9,7 +9,7 @@
 #include <span>
 #include <vector>
 
-namespace sim4cv::render {
+namespace sim4cv::codec {
 
 // RGB8 to a baseline JPEG file in memory: the camera effect below, and the
 // studio's WebSocket viewers (server/transport/http), which encode on their
@@ -36,4 +36,4 @@ class JpegRoundTrip {
   JpegEncoder encoder_;
 };
 
-}  // namespace sim4cv::render
+}  // namespace sim4cv::codec
