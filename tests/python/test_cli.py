@@ -37,9 +37,9 @@ def test_a_bad_option_of_a_command_is_a_usage_error(capsys):
 
 
 def test_a_subcommand_added_to_a_module_is_reached_without_editing_cli(monkeypatch, capsys):
-    import sim4cv.sequences as sequences
+    import sim4cv.sequences_cli as sequences_cli
     seen = []
-    monkeypatch.setattr(sequences, "main", lambda argv: seen.append(argv) or 0)
+    monkeypatch.setattr(sequences_cli, "main", lambda argv: seen.append(argv) or 0)
     assert cli.main(["sequences", "new-subcommand", "--x", "1"]) == 0
     assert seen == [["new-subcommand", "--x", "1"]]
 

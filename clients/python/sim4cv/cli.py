@@ -21,8 +21,8 @@ from typing import List, Optional
 
 # command -> (module whose main(argv) it runs, what it does)
 COMMANDS = {
-    "experiment": ("experiment", "scripted tracking experiments from YAML files: runs, resume, reports"),
-    "sequences": ("sequences", "UAV123-format tracking sequences: generate, attributes, maps"),
+    "experiment": ("experiment_cli", "scripted tracking experiments from YAML files: runs, resume, reports"),
+    "sequences": ("sequences_cli", "UAV123-format tracking sequences: generate, attributes, maps"),
     "ope": ("ope_cli", "one-pass evaluation (OPE) of tracker results: success and precision"),
     "driving": ("driving", "the driving case study: generate, train, evaluate, drive, human, ..."),
     "guided": ("driving_guided", "guided driving: layout, generate, evaluate, probe"),

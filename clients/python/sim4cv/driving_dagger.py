@@ -71,7 +71,7 @@ def collect(policy, maps: Sequence[str], surroundings: Sequence[str], out: str, 
     """Drives `policy` (a driving_eval policy: NetworkPolicy, or any with
     waypoints()) over the maps, then renders the poses off the lane into the
     dataset `out`; returns dataset.json's content."""
-    from .driving_guided import MapGoals
+    from .driving_route import MapGoals
     from .driving_relabel import relabel
     if takeover_m <= de.TAKEBACK_M:
         raise dd.DatasetError("--takeover %g: more than %g m (the reference policy hands back within %g m)"

@@ -30,6 +30,7 @@ from . import driving_labels as dl
 from . import driving_metrics as dm
 from . import driving_obstacles as dob
 from .driving_dataset import CAMERA_SETTINGS, WAYPOINT_COUNT, WAYPOINT_STEP_M, RoutePath, parse_map, resolve_maps
+from .driving_route import RoadGrid, RouteGoals
 
 EGO, EGO_CAMERA = "ego", "ego_cam"
 OFF_ROAD_M = 4.0          # beyond the road's right edge or into the far side of the other lane
@@ -254,7 +255,6 @@ class RouteNavigation:
     also goes on, so the image alone cannot tell the way)."""
 
     def __init__(self, info: dict, route: str):
-        from .driving_guided import RoadGrid, RouteGoals
         self.goals = RouteGoals(info, RoadGrid.from_map(info["path"]), route)
 
     def goal(self, u: float) -> float:

@@ -30,7 +30,7 @@ from . import driving_obstacles as dob
 
 
 def relabel(folder: str, seed: int = 0, log=print) -> Dict[str, int]:
-    from .driving_guided import MapGoals
+    from .driving_route import MapGoals
     import json
     with open(os.path.join(folder, "dataset.json")) as f:
         meta = json.load(f)

@@ -332,12 +332,8 @@ def add_gt_deviation(records, out_dir):
             r["deviation_from_gt_m"] = sum(distances) / len(distances)
 
 
-def main(argv=None):
-    """The command line (run, plan, run-one, status, gather, resubmit, plan-commands): sim4cv.experiment_cli."""
-    from .experiment_cli import main as cli_main
-    return cli_main(argv)
-
 
 if __name__ == "__main__":
     multiprocessing.freeze_support()
+    from sim4cv.experiment_cli import main  # the command line lives there; this file is only its -m name
     sys.exit(main())

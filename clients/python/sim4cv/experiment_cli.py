@@ -1,7 +1,7 @@
 """The command line of sim4cv.experiment (docs/tracking.md, "Experiments";
 docs/scaling.md): run, plan, run-one, status, gather, resubmit and
 plan-commands, each a thin layer over sim4cv.tasks, sim4cv.executors and
-sim4cv.tasks_gather. Entered through sim4cv.experiment.main(argv)."""
+sim4cv.tasks_gather. Run as `python3 -m sim4cv.experiment` or `sim4cv experiment`."""
 
 import argparse
 import os

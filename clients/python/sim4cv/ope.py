@@ -409,12 +409,8 @@ def evaluate(sequences_dir, results_dir, convention="otb", trackers=None, origin
     return report
 
 
-def main(argv=None):
-    """`python3 -m sim4cv.ope`: see ope_cli.py."""
-    from .ope_cli import main as cli_main
-    return cli_main(argv)
-
 
 if __name__ == "__main__":
     import sys
+    from sim4cv.ope_cli import main  # the command line lives there; this file is only its -m name
     sys.exit(main())

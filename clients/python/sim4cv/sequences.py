@@ -480,11 +480,7 @@ def recompute_attributes(out_root, log=None):
             log("%s: %s" % (os.path.basename(seq_dir), " ".join(a for a in attrs.ABBREVS if seq[a]) or "none"))
 
 
-def main(argv=None):
-    """The command line (sim4cv.sequences_cli, module docstring)."""
-    from .sequences_cli import main as cli_main
-    return cli_main(argv)
-
 
 if __name__ == "__main__":
+    from sim4cv.sequences_cli import main  # the command line lives there; this file is only its -m name
     sys.exit(main())

@@ -5,11 +5,7 @@ matches the answer by request_id and raises ServerError on a refusal.
 """
 
 from ._proto import pb
-
-
-def _kind_value(kind):
-    from .client import entity_kind_value  # client imports this module
-    return entity_kind_value(kind)
+from .images import entity_kind_value as _kind_value
 
 
 def _load_map(route, car_speed, traffic, **source):
