@@ -27,13 +27,15 @@ HOSTILE = [
 ]
 
 
-def _fake_daemon(server, frame):
-    """Answers the Hello with a Welcome, then sends every hostile chunk and
-    finally one honest frame in one chunk."""
+def _fake_daemon(server, frame, go):
+    """Answers the Hello with a Welcome, then, once the test says go (it has
+    started recording refusals), sends every hostile chunk and finally one
+    honest frame in one chunk."""
     data, peer = server.recvfrom(65536)
     hello = pb.Envelope()
     hello.ParseFromString(data)
     server.sendto(pb.Envelope(welcome=pb.Welcome(client_id=7, protocol_version=1)).SerializeToString(), peer)
+    go.wait(30.0)
     for datagram, _ in HOSTILE:
         server.sendto(datagram, peer)
     whole = pb.Envelope(frame=frame).SerializeToString()
@@ -44,7 +46,8 @@ def test_udp_client_refuses_lying_chunks_without_allocating():
     server = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     server.bind(("127.0.0.1", 0))
     frame = pb.Frame(frame_id=9, camera="honest")
-    fake = threading.Thread(target=_fake_daemon, args=(server, frame), daemon=True)
+    go = threading.Event()
+    fake = threading.Thread(target=_fake_daemon, args=(server, frame, go), daemon=True)
     fake.start()
     tracemalloc.start()
     try:
@@ -57,6 +60,7 @@ def test_udp_client_refuses_lying_chunks_without_allocating():
             problems.append(client.reassembler.last_invalid)
             return result
         client.reassembler.add = add
+        go.set()  # before this, the client's receiver could take a chunk the wrapper never saw
         received = client.receive_frame(timeout=10.0)
         _, peak = tracemalloc.get_traced_memory()
         client.close()
