@@ -106,8 +106,7 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   UavParts uav = MakeUavParts(uav_span_, {0.15f, 0.15f, 0.18f});
   uav_mesh_ = add_mesh(std::move(uav.body));
   rotor_mesh_ = add_mesh(std::move(uav.rotor));
-  PedestrianParts walker = MakePedestrianParts(0);
-  walker_meshes_ = {add_mesh(std::move(walker.body)), add_mesh(std::move(walker.leg)), add_mesh(std::move(walker.arm))};
+  walker_looks_ = std::make_unique<WalkerLooks>(add_mesh);
   // Entities take the ids below the static objects' (sim::kMaxEntityId).
   instance_id_bound_ = sim::kMaxEntityId + 1;
   for (const auto& object : static_labelled_)
@@ -137,21 +136,22 @@ void SceneGraphics::Update(const sim::State& state) {
         half_extents = scene_.uav.params.half_extents;
         break;
       case sim::EntityKind::kPedestrian:
-        mesh = walker_meshes_.body;
         half_extents = kPedestrianBox;
         box_centre.z() += kPedestrianBox.z();
         break;
     }
     const Eigen::Matrix4f pose = BodyPose(entity.body);
-    items_.push_back({mesh, pose, instance});
-    // Moving parts: a UAV's rotors, a pedestrian's limbs (same instance).
+    if (entity.kind == sim::EntityKind::kPedestrian) {
+      walker_looks_->Append(items_, instance, pose, entity.body.position.head<2>(), entity.body.Yaw(),
+                            entity.body.linear_velocity.norm());
+    } else {
+      items_.push_back({mesh, pose, instance});
+    }
+    // Moving parts: a UAV's rotors (same instance).
     if (entity.kind == sim::EntityKind::kUav) {
       for (std::size_t rotor = 0; rotor < 4; ++rotor) {
         items_.push_back({rotor_mesh_, pose * RotorPose(uav_span_, rotor, state.sim_time), instance});
       }
-    } else if (entity.kind == sim::EntityKind::kPedestrian) {
-      AppendLimbs(items_, walker_meshes_, pose, entity.body.position.head<2>(), entity.body.Yaw(),
-                  entity.body.linear_velocity.norm(), instance);
     }
     labelled_.push_back({instance, object_class, 0});
     moving_.push_back({instance, object_class, box_centre, entity.body.orientation, entity.body.linear_velocity,

@@ -1,0 +1,145 @@
+// Walkers drawn from the packaged people: the bundle the build converted is
+// whole and lean, every person is a walker's height and stays inside the
+// walker's 3D box with its feet on the ground whatever the sway, the look is
+// a fixed function of the instance id, and a damaged bundle is refused with
+// a message saying what is wrong.
+#include "server/render/walker_looks.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include "server/render/people_bundle.h"
+#include "server/render/traffic_meshes.h"
+
+namespace sim4cv::render {
+namespace {
+
+Eigen::Vector3f PositionOf(const Vertex& v) { return {v.position[0], v.position[1], v.position[2]}; }
+
+TEST(PeopleBundle, HoldsSeveralLeanPeople) {
+  const std::vector<Mesh>& people = PeopleMeshes();
+  ASSERT_GE(people.size(), 4u) << "built without sweethome3d-furniture? (bash scripts/setup.sh, then rebuild)";
+  for (const Mesh& person : people) {
+    EXPECT_GE(person.indices.size() / 3, 1500u);
+    EXPECT_LE(person.indices.size() / 3, 3000u);
+    for (const Vertex& v : person.vertices) {
+      EXPECT_EQ(v.semantic, static_cast<uint32_t>(SemanticClass::kPerson));
+      EXPECT_NEAR(Eigen::Vector3f(v.normal[0], v.normal[1], v.normal[2]).norm(), 1.0f, 1e-3f);
+      for (const float c : v.color) EXPECT_TRUE(c >= 0.0f && c <= 1.0f);
+    }
+  }
+}
+
+TEST(PeopleBundle, EveryPersonStaysInTheWalkerBoxWithFeetOnTheGround) {
+  for (const Mesh& person : PeopleMeshes()) {
+    float lowest_at_rest = 1e9f, highest_at_rest = -1e9f;
+    for (const Vertex& v : person.vertices) {
+      lowest_at_rest = std::min(lowest_at_rest, v.position[2]);
+      highest_at_rest = std::max(highest_at_rest, v.position[2]);
+    }
+    EXPECT_NEAR(lowest_at_rest, 0.0f, 0.01f);
+    EXPECT_NEAR(highest_at_rest, kPedestrianHeight, 0.02f);
+    for (double phase = 0.0; phase < 2.0 * std::numbers::pi; phase += 0.25) {
+      const Eigen::Matrix4f sway = SwayPose(phase, 2.0);
+      float lowest = 1e9f;
+      for (const Vertex& v : person.vertices) {
+        const Eigen::Vector3f p = (sway * PositionOf(v).homogeneous()).head<3>();
+        EXPECT_LE(std::abs(p.x()), kPedestrianBox.x());
+        EXPECT_LE(std::abs(p.y()), kPedestrianBox.y());
+        EXPECT_LE(p.z(), 2.0 * kPedestrianBox.z());
+        lowest = std::min(lowest, p.z());
+      }
+      // Rolling on the point between the feet lifts or sinks a foot by at most its offset times the lean.
+      EXPECT_NEAR(lowest, 0.0f, 0.01f) << "phase " << phase;
+    }
+  }
+}
+
+TEST(WalkerLooks, TheLookIsAFixedFunctionOfTheId) {
+  std::vector<Mesh> meshes;
+  const WalkerLooks looks([&](Mesh mesh) {
+    meshes.push_back(std::move(mesh));
+    return static_cast<MeshId>(meshes.size() - 1);
+  });
+  ASSERT_TRUE(looks.packaged());
+  EXPECT_EQ(meshes.size(), PeopleMeshes().size());
+  std::set<MeshId> seen;
+  for (InstanceId id = 1; id <= 40; ++id) {
+    std::vector<DrawItem> first, again;
+    looks.Append(first, id, Eigen::Matrix4f::Identity(), {3.0 * id, 1.0}, 0.3, 1.2);
+    looks.Append(again, id, Eigen::Matrix4f::Identity(), {3.0 * id, 1.0}, 0.3, 1.2);
+    ASSERT_EQ(first.size(), 1u);
+    ASSERT_EQ(again.size(), 1u);
+    EXPECT_EQ(first[0].mesh, again[0].mesh);
+    EXPECT_EQ(first[0].instance, id);
+    EXPECT_TRUE(first[0].world_from_model.isApprox(again[0].world_from_model));
+    seen.insert(first[0].mesh);
+  }
+  EXPECT_EQ(seen.size(), meshes.size()) << "forty walkers show every person";
+}
+
+TEST(WalkerLooks, StandingStillIsUpright) {
+  EXPECT_TRUE(SwayPose(1.0, 0.0).isApprox(Eigen::Matrix4f::Identity()));
+}
+
+std::vector<unsigned char> OnePersonBundle() {
+  std::vector<unsigned char> bytes = {'S', '4', 'C', 'V', 'P', 'P', 'L', '1'};
+  const auto put_u32 = [&](uint32_t value) {
+    const auto* p = reinterpret_cast<const unsigned char*>(&value);
+    bytes.insert(bytes.end(), p, p + 4);
+  };
+  put_u32(1);
+  put_u32(3);
+  put_u32(3);
+  for (int vertex = 0; vertex < 3; ++vertex) {
+    const float v[9] = {static_cast<float>(vertex), 0, static_cast<float>(vertex == 2), 0, -1, 0, 0.5f, 0.5f, 0.5f};
+    const auto* p = reinterpret_cast<const unsigned char*>(v);
+    bytes.insert(bytes.end(), p, p + sizeof v);
+  }
+  for (uint32_t index : {0u, 1u, 2u}) put_u32(index);
+  return bytes;
+}
+
+std::string ParseError(const std::vector<unsigned char>& bytes) {
+  try {
+    ParsePeopleBundle(bytes);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "(accepted)";
+}
+
+TEST(PeopleBundle, ParsesAWholeBundleAndRefusesDamagedOnes) {
+  const std::vector<unsigned char> good = OnePersonBundle();
+  const std::vector<Mesh> meshes = ParsePeopleBundle(good);
+  ASSERT_EQ(meshes.size(), 1u);
+  EXPECT_EQ(meshes[0].indices, (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_EQ(meshes[0].vertices[2].position[2], 1.0f);
+
+  std::vector<unsigned char> bad_magic = good;
+  bad_magic[7] = '2';
+  EXPECT_EQ(ParseError(bad_magic), "people bundle: not a bundle (magic)");
+  const std::vector<unsigned char> truncated(good.begin(), good.end() - 2);
+  EXPECT_EQ(ParseError(truncated), "people bundle: truncated in the indices at byte 128 of 138");
+  std::vector<unsigned char> bad_index = good;
+  bad_index[bad_index.size() - 4] = 3;
+  EXPECT_EQ(ParseError(bad_index), "people bundle: an index past the model's vertices");
+  std::vector<unsigned char> trailing = good;
+  trailing.push_back(0);
+  EXPECT_EQ(ParseError(trailing), "people bundle: bytes left after the last model");
+  std::vector<unsigned char> huge = good;
+  huge[12] = 0xFF;  // the vertex count's low byte
+  huge[15] = 0x7F;
+  EXPECT_EQ(ParseError(huge), "people bundle: a model's counts do not fit (2130706687 vertices, 3 indices)");
+}
+
+}  // namespace
+}  // namespace sim4cv::render
