@@ -69,13 +69,15 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
                proto::OBJECT_CLASS_BUILDING,
                PoseMatrix(Eigen::Vector3f(b.centre.x(), b.centre.y(), half.z()), yaw));
   }
+  const auto add_mesh = [&](Mesh mesh) {
+    meshes_.push_back(std::move(mesh));
+    return static_cast<MeshId>(meshes_.size() - 1);
+  };
+  // One set of walker meshes for the spawned pedestrians and the traffic's walkers.
+  walker_looks_ = std::make_unique<WalkerLooks>(add_mesh);
   if (scene.traffic) {
     const traffic::TrafficIds ids = sim::TrafficIdsOf(scene);
     for (const auto& object : static_labelled_) SIM4CV_DEMAND(object.instance < ids.parked);
-    const auto add_mesh = [&](Mesh mesh) {
-      meshes_.push_back(std::move(mesh));
-      return static_cast<MeshId>(meshes_.size() - 1);
-    };
     const auto add_item = [&](MeshId mesh, InstanceId instance, uint32_t object_class, const Eigen::Matrix4f& pose) {
       if (instance != kUnlabelled) {
         static_labelled_.push_back({instance, object_class, 0});
@@ -85,7 +87,8 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     };
     traffic_ =
         std::make_unique<TrafficGraphics>(*scene.traffic, ids, scene.car.params.chassis_half_extents,
-                                          vehicles::Car::BoxCentreHeightAtRest(scene.car.params), add_mesh, add_item);
+                                          vehicles::Car::BoxCentreHeightAtRest(scene.car.params), *walker_looks_,
+                                          add_mesh, add_item);
   }
   static_item_count_ = items_.size();
   for (DrawItem& item : items_) {
@@ -98,15 +101,10 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   target_car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.15f, 0.30f, 0.75f}));
   car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
-  const auto add_mesh = [&](Mesh mesh) {
-    meshes_.push_back(std::move(mesh));
-    return static_cast<MeshId>(meshes_.size() - 1);
-  };
   uav_span_ = 2.0f * static_cast<float>(scene.uav.params.half_extents.x());
   UavParts uav = MakeUavParts(uav_span_, {0.15f, 0.15f, 0.18f});
   uav_mesh_ = add_mesh(std::move(uav.body));
   rotor_mesh_ = add_mesh(std::move(uav.rotor));
-  walker_looks_ = std::make_unique<WalkerLooks>(add_mesh);
   // Entities take the ids below the static objects' (sim::kMaxEntityId).
   instance_id_bound_ = sim::kMaxEntityId + 1;
   for (const auto& object : static_labelled_)

@@ -23,11 +23,12 @@ Eigen::Matrix4f GroundPose(const Eigen::Vector2d& position, double heading, doub
 
 TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids,
                                  const Eigen::Vector3d& car_half_extents, double car_centre_height,
-                                 const AddMesh& add_mesh, const AddStatic& add_static)
+                                 const WalkerLooks& walker_looks, const AddMesh& add_mesh,
+                                 const AddStatic& add_static)
     : plan_(plan),
       car_half_extents_(car_half_extents),
       car_centre_height_(car_centre_height),
-      walker_looks_(add_mesh) {
+      walker_looks_(walker_looks) {
   const Eigen::Vector3f car_size = 2.0f * car_half_extents.cast<float>();
   for (int i = 0; i < kCarVariants; ++i) {
     car_meshes_[i] = add_mesh(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), TrafficCarColour(i),

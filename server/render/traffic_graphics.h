@@ -28,10 +28,11 @@ class TrafficGraphics {
                                        const Eigen::Matrix4f& world_from_model)>;
 
   // `car_half_extents`: the simulated car's box, which traffic cars share;
-  // `car_centre_height`: where that box's centre stands at rest.
+  // `car_centre_height`: where that box's centre stands at rest;
+  // `walker_looks`: the scene's walker meshes (it must outlive this).
   TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids,
-                  const Eigen::Vector3d& car_half_extents, double car_centre_height, const AddMesh& add_mesh,
-                  const AddStatic& add_static);
+                  const Eigen::Vector3d& car_half_extents, double car_centre_height, const WalkerLooks& walker_looks,
+                  const AddMesh& add_mesh, const AddStatic& add_static);
 
   // Appends the lit lamps, moving cars and walkers at `state` and `sim_time`
   // (ids ascending, after every static one). No allocation once warm.
@@ -51,7 +52,7 @@ class TrafficGraphics {
   std::vector<InstanceId> light_ids_;
   std::array<MeshId, 3> lamp_meshes_{};  // by traffic::Signal
   std::array<MeshId, kCarVariants> car_meshes_{};
-  WalkerLooks walker_looks_;
+  const WalkerLooks& walker_looks_;
   InstanceId first_moving_car_ = 0, first_walker_ = 0, id_bound_ = 0;
 };
 
