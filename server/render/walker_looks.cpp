@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 
 #include "server/common/diagnostics.h"
 #include "server/render/people_bundle.h"
@@ -22,13 +21,12 @@ Eigen::Matrix4f SwayPose(double phase, double speed) {
   return pose;
 }
 
-WalkerLooks::WalkerLooks(const AddMesh& add_mesh) {
-  for (const Mesh& person : PeopleMeshes()) people_.push_back(add_mesh(person));
+WalkerLooks::WalkerLooks(const AddMesh& add_mesh, const std::vector<Mesh>& people) {
+  for (const Mesh& person : people) people_.push_back(add_mesh(person));
   if (!people_.empty()) return;
-  static std::once_flag warned;
-  std::call_once(warned, [] {
-    LOG_WARNING("built without sweethome3d-furniture (docs/assets.md): walkers are procedural box figures");
-  });
+  // Once per scene built: a build without the package should not go unnoticed.
+  LOG_WARNING("no packaged people (built without sweethome3d-furniture, docs/assets.md): walkers are procedural "
+              "box figures");
   for (uint32_t i = 0; i < kProceduralLooks; ++i) {
     PedestrianParts parts = MakePedestrianParts(i);
     procedural_.push_back({add_mesh(std::move(parts.body)), add_mesh(std::move(parts.leg)),

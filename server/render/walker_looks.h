@@ -9,6 +9,7 @@
 #include <functional>
 #include <vector>
 
+#include "server/render/people_bundle.h"
 #include "server/render/render_types.h"
 #include "server/render/traffic_meshes.h"
 
@@ -28,8 +29,9 @@ Eigen::Matrix4f SwayPose(double phase, double speed);
 class WalkerLooks {
  public:
   using AddMesh = std::function<MeshId(Mesh mesh)>;
-  // Adds the looks' meshes with `add_mesh`.
-  explicit WalkerLooks(const AddMesh& add_mesh);
+  // Adds the looks' meshes with `add_mesh`: `people` (by default the
+  // compiled-in bundle), or if there are none the procedural figures.
+  explicit WalkerLooks(const AddMesh& add_mesh, const std::vector<Mesh>& people = PeopleMeshes());
 
   // Appends the draw items of walker `id` standing at `ground_pose` (its
   // feet's point, facing +x), at ground `position`, `heading` and `speed`.

@@ -18,6 +18,7 @@
 
 #include "server/render/people_bundle.h"
 #include "server/render/traffic_meshes.h"
+#include "tests/support/no_warnings.h"
 
 namespace sim4cv::render {
 namespace {
@@ -84,6 +85,22 @@ TEST(WalkerLooks, TheLookIsAFixedFunctionOfTheId) {
     seen.insert(first[0].mesh);
   }
   EXPECT_EQ(seen.size(), meshes.size()) << "forty walkers show every person";
+}
+
+TEST(WalkerLooks, WithoutPackagedPeopleWalkersAreProceduralAndItSaysSo) {
+  testing::ExpectLogged("no packaged people (built without sweethome3d-furniture, docs/assets.md)");
+  std::vector<Mesh> meshes;
+  const WalkerLooks looks(
+      [&](Mesh mesh) {
+        meshes.push_back(std::move(mesh));
+        return static_cast<MeshId>(meshes.size() - 1);
+      },
+      {});
+  EXPECT_FALSE(looks.packaged());
+  std::vector<DrawItem> items;
+  looks.Append(items, 9, Eigen::Matrix4f::Identity(), {1.0, 2.0}, 0.0, 1.4);
+  ASSERT_EQ(items.size(), 5u) << "a body and four limbs";
+  for (const DrawItem& item : items) EXPECT_EQ(item.instance, 9);
 }
 
 TEST(WalkerLooks, StandingStillIsUpright) {
