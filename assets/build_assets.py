@@ -15,12 +15,16 @@ and writes a lean bundle the daemon compiles in:
   so the renderer needs no texture and colour stays one pass with the
   ground truth.
 
+Each person comes at two levels of detail: TARGET_TRIANGLES, and
+FAR_TRIANGLES for when it is small on screen (the renderer picks per camera).
+
 Outputs: a C++ source holding the bundle as bytes (--cpp), the bundle as a
 file (--bin, optional) and the attribution list (--attribution, Markdown).
-Bundle layout, little-endian: b"S4CVPPL1", u32 model count, then per model
-u32 vertex count, u32 index count, vertex count x 9 float32 (position xyz,
-normal xyz, linear RGB colour), index count x u32 (counter-clockwise
-triangles seen from outside). server/render/people_bundle.cpp reads it.
+Bundle layout, little-endian: b"S4CVPPL2", u32 person count, u32 level
+count (2), then per person per level (full first) a mesh: u32 vertex count,
+u32 index count, vertex count x 9 float32 (position xyz, normal xyz, linear
+RGB colour), index count x u32 (counter-clockwise triangles seen from
+outside). server/render/people_bundle.cpp reads it.
 
 With --empty (the package is not installed) it writes a bundle of no
 models; the renderer then draws its procedural walkers and says so.
@@ -43,7 +47,8 @@ from PIL import Image
 FURNITURE_DIR = "/usr/share/sweethome3d/furniture"
 PERSON_HEIGHT_M = 1.74  # 1 cm under the walker box (kPedestrianBox), room for the sway
 TARGET_TRIANGLES = 2000
-MAGIC = b"S4CVPPL1"
+FAR_TRIANGLES = 700
+MAGIC = b"S4CVPPL2"
 
 # The people used, in bundle order: (archive, catalogue id). Adults standing
 # upright in different clothes, chosen by looking at each (--preview).
@@ -237,17 +242,19 @@ def convert(archive, entry):
     materials = parse_mtl(archive.read(folder + mtl_name).decode("latin-1"))
     colours = triangle_colours(archive, folder, corners, tri_materials, uvs, materials)
     triangles = np.array([[a[0], b[0], c[0]] for a, b, c in corners], dtype=np.int64)
-    p = to_metres_z_up(positions)
-    source_triangles = len(triangles)
-    p, c, tris = simplify(p, triangles, colours, TARGET_TRIANGLES)
-    p = stand(p)  # clustering moved the soles up and the crown down
-    return {"positions": p, "normals": vertex_normals(p, tris), "colours": np.clip(c, 0.0, 1.0),
-            "indices": tris, "source_triangles": source_triangles}
+    source = to_metres_z_up(positions)
+    levels = []
+    for target in (TARGET_TRIANGLES, FAR_TRIANGLES):
+        p, c, tris = simplify(source, triangles, colours, target)
+        p = stand(p)  # clustering moved the soles up and the crown down
+        levels.append({"positions": p, "normals": vertex_normals(p, tris), "colours": np.clip(c, 0.0, 1.0),
+                       "indices": tris})
+    return dict(levels[0], far=levels[1], source_triangles=len(triangles))
 
 
 def pack(models):
-    out = bytearray(MAGIC + struct.pack("<I", len(models)))
-    for m in models:
+    out = bytearray(MAGIC + struct.pack("<II", len(models), 2))
+    for m in [level for model in models for level in (model, model["far"])]:
         vertices = np.hstack([m["positions"], m["normals"], m["colours"]]).astype("<f4")
         out += struct.pack("<II", len(vertices), m["indices"].size)
         out += vertices.tobytes()
@@ -305,7 +312,8 @@ def main(argv):
             model = convert(archive, entry)
             models.append(model)
             rows.append((model_id, entry.get("name", ""), entry.get("creator", ""), header.get("license", ""),
-                         archive_name, entry["model"], model["source_triangles"], len(model["indices"])))
+                         archive_name, entry["model"], model["source_triangles"], len(model["indices"]),
+                         len(model["far"]["indices"])))
             if args.preview:
                 os.makedirs(args.preview, exist_ok=True)
                 write_preview(os.path.join(args.preview, model_id.split("#")[1] + ".png"), model)
@@ -324,13 +332,14 @@ def main(argv):
                     "assets/build_assets.py. Each model's licence as its archive's catalogue states it\n"
                     "(the package's copyright file: /usr/share/doc/sweethome3d-furniture/copyright).\n\n"
                     % FURNITURE_DIR)
-            f.write("| # | model | title | author | licence | source | triangles (source -> bundle) |\n")
+            f.write("| # | model | title | author | licence | source | triangles (source -> full, far) |\n")
             f.write("|---|---|---|---|---|---|---|\n")
-            for i, (model_id, name, creator, licence, archive_name, path, src, dst) in enumerate(rows):
-                f.write("| %d | %s | %s | %s | %s | %s:%s | %d -> %d |\n"
-                        % (i, model_id, name, creator, licence.replace("\ufffd", "(c)"), archive_name, path, src, dst))
-    print("people bundle: %d models, %d bytes, %s triangles" % (len(models), len(bundle),
-                                                                 [len(m["indices"]) for m in models]))
+            for i, (model_id, name, creator, licence, archive_name, path, src, dst, far) in enumerate(rows):
+                f.write("| %d | %s | %s | %s | %s | %s:%s | %d -> %d, %d |\n"
+                        % (i, model_id, name, creator, licence.replace("\ufffd", "(c)"), archive_name, path, src, dst,
+                           far))
+    print("people bundle: %d people, %d bytes, %s triangles" % (
+        len(models), len(bundle), [(len(m["indices"]), len(m["far"]["indices"])) for m in models]))
     return 0
 
 

@@ -13,7 +13,8 @@ extern const std::size_t kPeopleBundleSize;
 
 namespace {
 
-constexpr char kMagic[8] = {'S', '4', 'C', 'V', 'P', 'P', 'L', '1'};
+constexpr char kMagic[8] = {'S', '4', 'C', 'V', 'P', 'P', 'L', '2'};
+constexpr uint32_t kLevels = 2;  // full, far
 constexpr std::size_t kFloatsPerVertex = 9;  // position, normal, colour
 
 class Reader {
@@ -39,45 +40,57 @@ class Reader {
   std::size_t offset_ = 0;
 };
 
+Mesh ReadMesh(Reader& reader) {
+  Mesh mesh;
+  const uint32_t vertex_count = reader.U32("a vertex count");
+  const uint32_t index_count = reader.U32("an index count");
+  if (index_count % 3 != 0 || vertex_count > reader.left() / (kFloatsPerVertex * sizeof(float))) {
+    throw std::runtime_error("people bundle: a model's counts do not fit (" + std::to_string(vertex_count) +
+                             " vertices, " + std::to_string(index_count) + " indices)");
+  }
+  mesh.vertices.resize(vertex_count);
+  for (Vertex& vertex : mesh.vertices) {
+    float v[kFloatsPerVertex];
+    reader.Read(v, sizeof v, "a vertex");
+    std::memcpy(vertex.position, v, sizeof vertex.position);
+    std::memcpy(vertex.normal, v + 3, sizeof vertex.normal);
+    std::memcpy(vertex.color, v + 6, sizeof vertex.color);
+    vertex.semantic = static_cast<uint32_t>(SemanticClass::kPerson);
+  }
+  mesh.indices.resize(index_count);
+  reader.Read(mesh.indices.data(), index_count * sizeof(uint32_t), "the indices");
+  for (const uint32_t index : mesh.indices) {
+    if (index >= vertex_count) throw std::runtime_error("people bundle: an index past the model's vertices");
+  }
+  mesh.semantic = static_cast<uint32_t>(SemanticClass::kPerson);
+  return mesh;
+}
+
 }  // namespace
 
-std::vector<Mesh> ParsePeopleBundle(std::span<const unsigned char> bytes) {
+std::vector<Person> ParsePeopleBundle(std::span<const unsigned char> bytes) {
   Reader reader(bytes);
   char magic[sizeof kMagic];
   reader.Read(magic, sizeof magic, "the header");
   if (std::memcmp(magic, kMagic, sizeof kMagic) != 0) throw std::runtime_error("people bundle: not a bundle (magic)");
-  const uint32_t models = reader.U32("the model count");
-  std::vector<Mesh> meshes(models);
-  for (Mesh& mesh : meshes) {
-    const uint32_t vertex_count = reader.U32("a vertex count");
-    const uint32_t index_count = reader.U32("an index count");
-    if (index_count % 3 != 0 || vertex_count > reader.left() / (kFloatsPerVertex * sizeof(float))) {
-      throw std::runtime_error("people bundle: a model's counts do not fit (" + std::to_string(vertex_count) +
-                               " vertices, " + std::to_string(index_count) + " indices)");
-    }
-    mesh.vertices.resize(vertex_count);
-    for (Vertex& vertex : mesh.vertices) {
-      float v[kFloatsPerVertex];
-      reader.Read(v, sizeof v, "a vertex");
-      std::memcpy(vertex.position, v, sizeof vertex.position);
-      std::memcpy(vertex.normal, v + 3, sizeof vertex.normal);
-      std::memcpy(vertex.color, v + 6, sizeof vertex.color);
-      vertex.semantic = static_cast<uint32_t>(SemanticClass::kPerson);
-    }
-    mesh.indices.resize(index_count);
-    reader.Read(mesh.indices.data(), index_count * sizeof(uint32_t), "the indices");
-    for (const uint32_t index : mesh.indices) {
-      if (index >= vertex_count) throw std::runtime_error("people bundle: an index past the model's vertices");
-    }
-    mesh.semantic = static_cast<uint32_t>(SemanticClass::kPerson);
+  const uint32_t count = reader.U32("the person count");
+  const uint32_t levels = reader.U32("the level count");
+  if (levels != kLevels) {
+    throw std::runtime_error("people bundle: " + std::to_string(levels) + " levels of detail, not " +
+                             std::to_string(kLevels));
   }
-  if (reader.left() != 0) throw std::runtime_error("people bundle: bytes left after the last model");
-  return meshes;
+  std::vector<Person> people;
+  for (uint32_t i = 0; i < count; ++i) {
+    Mesh full = ReadMesh(reader);
+    people.push_back({std::move(full), ReadMesh(reader)});
+  }
+  if (reader.left() != 0) throw std::runtime_error("people bundle: bytes left after the last person");
+  return people;
 }
 
-const std::vector<Mesh>& PeopleMeshes() {
-  static const std::vector<Mesh> meshes = ParsePeopleBundle({kPeopleBundle, kPeopleBundleSize});
-  return meshes;
+const std::vector<Person>& PeopleMeshes() {
+  static const std::vector<Person> people = ParsePeopleBundle({kPeopleBundle, kPeopleBundleSize});
+  return people;
 }
 
 }  // namespace sim4cv::render

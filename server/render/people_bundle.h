@@ -15,12 +15,18 @@
 
 namespace sim4cv::render {
 
-// The bundle's meshes, parsed once on first use. Empty when the build had no
+// One person at two levels of detail: about 2,000 triangles, and about 700
+// for when it is small on screen (DrawItem::far_mesh).
+struct Person {
+  Mesh full, far;
+};
+
+// The bundle's people, parsed once on first use. Empty when the build had no
 // sweethome3d-furniture (CMake warned; walkers are then procedural).
-const std::vector<Mesh>& PeopleMeshes();
+const std::vector<Person>& PeopleMeshes();
 
 // Parses a bundle (layout in assets/build_assets.py); throws naming what is
 // wrong if `bytes` is not a whole, consistent bundle.
-std::vector<Mesh> ParsePeopleBundle(std::span<const unsigned char> bytes);
+std::vector<Person> ParsePeopleBundle(std::span<const unsigned char> bytes);
 
 }  // namespace sim4cv::render

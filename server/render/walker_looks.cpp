@@ -21,8 +21,11 @@ Eigen::Matrix4f SwayPose(double phase, double speed) {
   return pose;
 }
 
-WalkerLooks::WalkerLooks(const AddMesh& add_mesh, const std::vector<Mesh>& people) {
-  for (const Mesh& person : people) people_.push_back(add_mesh(person));
+WalkerLooks::WalkerLooks(const AddMesh& add_mesh, const std::vector<Person>& people) {
+  for (const Person& person : people) {
+    const MeshId full = add_mesh(person.full);
+    people_.push_back({full, add_mesh(person.far)});
+  }
   if (!people_.empty()) return;
   // Once per scene built: a build without the package should not go unnoticed.
   LOG_WARNING("no packaged people (built without sweethome3d-furniture, docs/assets.md): walkers are procedural "
@@ -38,7 +41,11 @@ void WalkerLooks::Append(std::vector<DrawItem>& items, InstanceId id, const Eige
                          const Eigen::Vector2d& position, double heading, double speed) const {
   const double phase = GaitPhase(position, heading);
   if (packaged()) {
-    items.push_back({people_[id % people_.size()], ground_pose * SwayPose(phase, speed), id});
+    const PersonIds& person = people_[id % people_.size()];
+    DrawItem item{person.full, ground_pose * SwayPose(phase, speed), id};
+    item.far_mesh = person.far;
+    item.far_below_px = kFarPersonBelowPx;
+    items.push_back(item);
     return;
   }
   const WalkerMeshIds& look = procedural_[id % procedural_.size()];

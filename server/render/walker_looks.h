@@ -19,6 +19,11 @@ namespace sim4cv::render {
 // with its steps, and forward at full speed. Small enough that every packaged
 // person stays inside kPedestrianBox (walker_looks_test.cpp).
 inline constexpr double kMaxSway = 0.026;
+// A packaged person is drawn with its far mesh (Person::far) when its
+// bounding sphere spans fewer rows than this: below the 96 px walkers the
+// realism probe counts, where the lighter mesh's coarser head and hands
+// are a few pixels.
+inline constexpr float kFarPersonBelowPx = 64.0f;
 
 // The rigid pose of a packaged person relative to its ground pose at gait
 // `phase` (GaitPhase) and `speed` m/s: a roll with the steps (one sway per
@@ -31,7 +36,7 @@ class WalkerLooks {
   using AddMesh = std::function<MeshId(Mesh mesh)>;
   // Adds the looks' meshes with `add_mesh`: `people` (by default the
   // compiled-in bundle), or if there are none the procedural figures.
-  explicit WalkerLooks(const AddMesh& add_mesh, const std::vector<Mesh>& people = PeopleMeshes());
+  explicit WalkerLooks(const AddMesh& add_mesh, const std::vector<Person>& people = PeopleMeshes());
 
   // Appends the draw items of walker `id` standing at `ground_pose` (its
   // feet's point, facing +x), at ground `position`, `heading` and `speed`.
@@ -44,7 +49,10 @@ class WalkerLooks {
 
  private:
   static constexpr uint32_t kProceduralLooks = 6;
-  std::vector<MeshId> people_;
+  struct PersonIds {
+    MeshId full = 0, far = 0;
+  };
+  std::vector<PersonIds> people_;
   std::vector<WalkerMeshIds> procedural_;
 };
 
