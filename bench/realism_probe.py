@@ -76,8 +76,8 @@ def camera_pose_towards(position, heading_deg, rng):
 
 def next_target(frame, walkers, index):
     """The walker the next frame is aimed at: (id, position, velocity). Odd frames: the traffic walker
-    (its six looks) nearest to the camera among those the last frame's 3D ground truth holds, if any;
-    else, and on even frames, one of the spawned walkers (one look) in turn."""
+    nearest to the camera among those the last frame's 3D ground truth holds, if any;
+    else, and on even frames, one of the spawned walkers in turn."""
     if index % 2 == 1:
         camera = frame.message.camera_pose.position
         traffic = [o for o in frame.message.objects if o.object_class == PEDESTRIAN and o.object_id not in walkers]

@@ -19,6 +19,7 @@ PACKAGES=(
   chromium python3-websocket  # the studio's browser tests (tests/studio, tools/cdp_driver.py): headless Chromium over DevTools
   slurmctld slurmd slurm-client munge python3-distributed  # tests/python/test_scaling.py: a one-machine Slurm cluster and Dask (docs/scaling.md)
   opencv-data  # the realism probe (bench/realism_probe.py): OpenCV's Haar full- and upper-body cascades
+  sweethome3d-furniture  # the packaged people walkers are drawn with (assets/build_assets.py, docs/assets.md)
 )
 
 missing=()

@@ -62,6 +62,8 @@ struct Headlight {
 
 // Index into the mesh list the Renderer was built with.
 using MeshId = uint32_t;
+// DrawItem::far_mesh when the item has no lighter mesh.
+inline constexpr MeshId kNoFarMesh = UINT32_MAX;
 
 // Instance id 0 marks unlabelled geometry (ground, road); labelled objects use
 // 1..65535 and show up in the mask and the boxes.
@@ -78,6 +80,11 @@ struct DrawItem {
   // Never moves while the scene lasts (map objects, buildings): its shadow may
   // be drawn once and reused (shadow_map.h). False is always safe.
   bool fixed = false;
+  // Level of detail: a lighter mesh drawn instead of `mesh` (in every channel
+  // and the shadow of the camera alike) when `mesh`'s bounding sphere spans
+  // fewer than `far_below_px` rows of the camera's image.
+  MeshId far_mesh = kNoFarMesh;
+  float far_below_px = 0.0f;
 };
 
 // A pinhole camera. The camera frame follows OpenGL: x right, y up, looking

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
@@ -129,6 +130,8 @@ struct Renderer::Impl {
 
   // Per-frame scratch, kept to avoid allocating once warmed up.
   std::vector<uint32_t> labelled_drawn;  // indices of labelled items that survived culling
+  Eigen::Vector3f lod_eye = Eigen::Vector3f::Zero();  // the current camera, for MeshFor
+  float lod_focal_px = 1.0f;
   std::vector<InstanceId> queried_instances;
 
   Impl() = default;
@@ -156,6 +159,9 @@ struct Renderer::Impl {
   void DrawPass(const Pass& pass, std::span<const DrawItem> items, RenderTargets& into, uint32_t scale, PlaneSet planes,
                 uint32_t look, std::span<uint32_t> unoccluded_pixels);
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
+  // The mesh `item` is drawn with from the camera last set (DrawItem::far_mesh).
+  void SetLodCamera(const CameraView& camera);
+  MeshId MeshFor(const DrawItem& item) const;
   void Draw(const DrawItem& item) const;
   // The draw call of one mesh, with whatever program and uniforms are set.
   void DrawMesh(MeshId mesh) const;
@@ -230,13 +236,29 @@ bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vec
                      [&](const Eigen::Vector4f& plane) { return plane.head<3>().dot(center) + plane.w() >= -radius; });
 }
 
+// Level of detail from the camera's own image, whatever a pass's scale or
+// widened lens view, so every pass of a frame (shadows too) draws the same meshes.
+void Renderer::Impl::SetLodCamera(const CameraView& camera) {
+  lod_eye = camera.world_from_camera.block<3, 1>(0, 3);
+  lod_focal_px = static_cast<float>(camera.height) / (2.0f * std::tan(camera.fov_y_deg * 3.14159265f / 360.0f));
+}
+
+MeshId Renderer::Impl::MeshFor(const DrawItem& item) const {
+  if (item.far_mesh == kNoFarMesh) return item.mesh;
+  const MeshRange& mesh = meshes[item.mesh];
+  const Eigen::Vector3f centre =
+      item.world_from_model.topLeftCorner<3, 3>() * mesh.sphere_center + item.world_from_model.block<3, 1>(0, 3);
+  const float diameter_px = 2.0f * mesh.sphere_radius * lod_focal_px;
+  return diameter_px < item.far_below_px * (centre - lod_eye).norm() ? item.far_mesh : item.mesh;
+}
+
 void Renderer::Impl::Draw(const DrawItem& item) const {
   const Eigen::Matrix3f normal_matrix = item.world_from_model.topLeftCorner<3, 3>().inverse().transpose();
   glUniformMatrix4fv(program->u_model, 1, GL_FALSE, item.world_from_model.data());
   glUniformMatrix4fv(program->u_previous_model, 1, GL_FALSE, item.previous_world_from_model.data());
   glUniformMatrix3fv(program->u_normal_matrix, 1, GL_FALSE, normal_matrix.data());
   glUniform1ui(program->u_instance, item.instance);
-  DrawMesh(item.mesh);
+  DrawMesh(MeshFor(item));
 }
 
 void Renderer::Impl::DrawMesh(MeshId id) const {
@@ -270,6 +292,8 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
     const DrawItem& item = items[i];
     SIM4CV_THROW_UNLESS(item.mesh < meshes.size(),
                         "draw item " << i << " names mesh " << item.mesh << " of " << meshes.size());
+    SIM4CV_THROW_UNLESS(item.far_mesh == kNoFarMesh || item.far_mesh < meshes.size(),
+                        "draw item " << i << " names far mesh " << item.far_mesh << " of " << meshes.size());
     SIM4CV_THROW_UNLESS(
         unoccluded_pixels.empty() || item.instance < unoccluded_pixels.size(),
         "instance " << item.instance << " does not fit unoccluded_pixels of size " << unoccluded_pixels.size());
@@ -300,6 +324,7 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
   const Eigen::Vector2f viewport(static_cast<float>(scale * camera.width), static_cast<float>(scale * camera.height));
   const Eigen::Vector3f camera_position = camera.world_from_camera.block<3, 1>(0, 3);
   const bool full_rgb = (rgb_look & ChannelProgram::kFull) != 0;
+  SetLodCamera(camera);
 
   glViewport(0, 0, static_cast<GLsizei>(viewport.x()), static_cast<GLsizei>(viewport.y()));
   glEnable(GL_CULL_FACE);
@@ -352,6 +377,7 @@ ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<c
   const Eigen::Matrix4f clip_from_world = shadow_map->Fit(camera, look.to_sun);
   const auto planes = FrustumPlanes(clip_from_world);
   const GLint u_model = shadow_map->ModelLocation();
+  SetLodCamera(camera);
   // Fixed casters only when the map moved or the sun turned; moving ones every frame.
   const auto draw_casters = [&](bool fixed) {
     for (const DrawItem& item : items) {
@@ -360,7 +386,7 @@ ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<c
         continue;
       }
       glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
-      DrawMesh(item.mesh);
+      DrawMesh(MeshFor(item));
     }
   };
   if (!shadow_map->FixedCastersCached(clip_from_world)) {

@@ -67,13 +67,15 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
                proto::OBJECT_CLASS_BUILDING,
                PoseMatrix(Eigen::Vector3f(b.centre.x(), b.centre.y(), half.z()), yaw));
   }
+  const auto add_mesh = [&](Mesh mesh) {
+    meshes_.push_back(std::move(mesh));
+    return static_cast<MeshId>(meshes_.size() - 1);
+  };
+  // One set of walker meshes for the spawned pedestrians and the traffic's walkers.
+  walker_looks_ = std::make_unique<WalkerLooks>(add_mesh);
   if (scene.traffic) {
     const traffic::TrafficIds ids = sim::TrafficIdsOf(scene);
     for (const auto& object : static_labelled_) SIM4CV_DEMAND(object.instance < ids.parked);
-    const auto add_mesh = [&](Mesh mesh) {
-      meshes_.push_back(std::move(mesh));
-      return static_cast<MeshId>(meshes_.size() - 1);
-    };
     const auto add_item = [&](MeshId mesh, InstanceId instance, uint32_t object_class, const Eigen::Matrix4f& pose) {
       if (instance != kUnlabelled) {
         static_labelled_.push_back({instance, object_class, 0});
@@ -83,7 +85,8 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
     };
     traffic_ =
         std::make_unique<TrafficGraphics>(*scene.traffic, ids, scene.car.params.chassis_half_extents,
-                                          vehicles::BoxCentreHeightAtRest(scene.car.params), add_mesh, add_item);
+                                          vehicles::BoxCentreHeightAtRest(scene.car.params), *walker_looks_,
+                                          add_mesh, add_item);
   }
   static_item_count_ = items_.size();
   for (DrawItem& item : items_) {
@@ -96,16 +99,10 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   target_car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
   meshes_.push_back(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), {0.15f, 0.30f, 0.75f}));
   car_mesh_ = static_cast<MeshId>(meshes_.size() - 1);
-  const auto add_mesh = [&](Mesh mesh) {
-    meshes_.push_back(std::move(mesh));
-    return static_cast<MeshId>(meshes_.size() - 1);
-  };
   uav_span_ = 2.0f * static_cast<float>(scene.uav.params.half_extents.x());
   UavParts uav = MakeUavParts(uav_span_, {0.15f, 0.15f, 0.18f});
   uav_mesh_ = add_mesh(std::move(uav.body));
   rotor_mesh_ = add_mesh(std::move(uav.rotor));
-  PedestrianParts walker = MakePedestrianParts(0);
-  walker_meshes_ = {add_mesh(std::move(walker.body)), add_mesh(std::move(walker.leg)), add_mesh(std::move(walker.arm))};
   // Entities take the ids below the static objects' (sim::kMaxEntityId).
   instance_id_bound_ = sim::kMaxEntityId + 1;
   for (const auto& object : static_labelled_)
@@ -135,21 +132,22 @@ void SceneGraphics::Update(const sim::State& state) {
         half_extents = scene_.uav.params.half_extents;
         break;
       case sim::EntityKind::kPedestrian:
-        mesh = walker_meshes_.body;
         half_extents = kPedestrianBox;
         box_centre.z() += kPedestrianBox.z();
         break;
     }
     const Eigen::Matrix4f pose = BodyPose(entity.body);
-    items_.push_back({mesh, pose, instance});
-    // Moving parts: a UAV's rotors, a pedestrian's limbs (same instance).
+    if (entity.kind == sim::EntityKind::kPedestrian) {
+      walker_looks_->Append(items_, instance, pose, entity.body.position.head<2>(), entity.body.Yaw(),
+                            entity.body.linear_velocity.norm());
+    } else {
+      items_.push_back({mesh, pose, instance});
+    }
+    // Moving parts: a UAV's rotors (same instance).
     if (entity.kind == sim::EntityKind::kUav) {
       for (std::size_t rotor = 0; rotor < 4; ++rotor) {
         items_.push_back({rotor_mesh_, pose * RotorPose(uav_span_, rotor, state.sim_time), instance});
       }
-    } else if (entity.kind == sim::EntityKind::kPedestrian) {
-      AppendLimbs(items_, walker_meshes_, pose, entity.body.position.head<2>(), entity.body.Yaw(),
-                  entity.body.linear_velocity.norm(), instance);
     }
     labelled_.push_back({instance, object_class, 0});
     moving_.push_back({instance, object_class, box_centre, entity.body.orientation, entity.body.linear_velocity,

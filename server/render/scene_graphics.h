@@ -12,6 +12,7 @@
 #include "server/render/object_catalog.h"
 #include "server/render/render_types.h"
 #include "server/render/traffic_graphics.h"
+#include "server/render/walker_looks.h"
 #include "server/sim/scene.h"
 #include "server/sim/state.h"
 
@@ -62,7 +63,7 @@ class SceneGraphics {
   std::vector<DrawItem> previous_items_;  // items_ of the last Update
   std::size_t static_item_count_ = 0;
   MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0, rotor_mesh_ = 0;
-  WalkerMeshIds walker_meshes_;
+  std::unique_ptr<WalkerLooks> walker_looks_;
   float uav_span_ = 0.0f;
   std::vector<Eigen::Vector3f> lamps_;
   std::vector<Headlight> headlights_;

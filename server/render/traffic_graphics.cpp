@@ -23,16 +23,16 @@ Eigen::Matrix4f GroundPose(const Eigen::Vector2d& position, double heading, doub
 
 TrafficGraphics::TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids,
                                  const Eigen::Vector3d& car_half_extents, double car_centre_height,
-                                 const AddMesh& add_mesh, const AddStatic& add_static)
-    : plan_(plan), car_half_extents_(car_half_extents), car_centre_height_(car_centre_height) {
+                                 const WalkerLooks& walker_looks, const AddMesh& add_mesh,
+                                 const AddStatic& add_static)
+    : plan_(plan),
+      car_half_extents_(car_half_extents),
+      car_centre_height_(car_centre_height),
+      walker_looks_(walker_looks) {
   const Eigen::Vector3f car_size = 2.0f * car_half_extents.cast<float>();
   for (int i = 0; i < kCarVariants; ++i) {
     car_meshes_[i] = add_mesh(MakeCarMesh(car_size.x(), car_size.y(), car_size.z(), TrafficCarColour(i),
                                           static_cast<CarStyle>(i % kCarStyleCount)));
-  }
-  for (int i = 0; i < kWalkerLooks; ++i) {
-    PedestrianParts parts = MakePedestrianParts(static_cast<uint32_t>(i));
-    walker_meshes_[i] = {add_mesh(std::move(parts.body)), add_mesh(std::move(parts.leg)), add_mesh(std::move(parts.arm))};
   }
   for (const traffic::Signal signal : {traffic::Signal::kGreen, traffic::Signal::kYellow, traffic::Signal::kRed}) {
     lamp_meshes_[static_cast<std::size_t>(signal)] = add_mesh(MakeLampMesh(signal));
@@ -69,11 +69,10 @@ void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time
     lamp.block<3, 1>(0, 3) += lamp.topLeftCorner<3, 3>() * LampOffset(signal);
     items.push_back({lamp_meshes_[static_cast<std::size_t>(signal)], lamp, light_ids_[i]});
   }
-  // `draw_z`: where the mesh's origin stands; `box_z`: the 3D box's centre.
-  const auto add = [&](MeshId mesh, InstanceId id, uint32_t object_class, const Eigen::Vector3d& ground, double heading,
-                       double draw_z, double box_z, const Eigen::Vector3d& half_extents,
-                       const Eigen::Vector3d& velocity, double yaw_rate) {
-    items.push_back({mesh, GroundPose(ground.head<2>(), heading, draw_z), id});
+  // Labels a moving object whose 3D box is centred `box_z` above `ground`.
+  const auto label = [&](InstanceId id, uint32_t object_class, const Eigen::Vector3d& ground, double heading,
+                         double box_z, const Eigen::Vector3d& half_extents, const Eigen::Vector3d& velocity,
+                         double yaw_rate) {
     labelled.push_back({id, object_class, 0});
     moving.push_back({id, object_class, ground + Eigen::Vector3d(0, 0, box_z),
                       Eigen::Quaterniond(Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ())), velocity,
@@ -81,19 +80,20 @@ void TrafficGraphics::Append(const traffic::TrafficState& state, double sim_time
   };
   for (std::size_t i = 0; i < state.cars.size(); ++i) {
     const traffic::MovingCar& car = state.cars[i];
-    add(car_meshes_[(i + plan_.parked_cars().size()) % kCarVariants], first_moving_car_ + static_cast<InstanceId>(i),
-        proto::OBJECT_CLASS_CAR, car.position, car.heading, car_centre_height_, car_centre_height_, car_half_extents_,
-        car.linear_velocity, car.yaw_rate);
+    const auto id = static_cast<InstanceId>(first_moving_car_ + i);
+    items.push_back({car_meshes_[(i + plan_.parked_cars().size()) % kCarVariants],
+                     GroundPose(car.position.head<2>(), car.heading, car_centre_height_), id});
+    label(id, proto::OBJECT_CLASS_CAR, car.position, car.heading, car_centre_height_, car_half_extents_,
+          car.linear_velocity, car.yaw_rate);
   }
   for (std::size_t i = 0; i < state.walkers.size(); ++i) {
     const traffic::Walker& walker = state.walkers[i];
-    // The walker's body stands on its origin; its box is centred half its height up.
-    const WalkerMeshIds& look = walker_meshes_[i % kWalkerLooks];
+    // The walker stands on its origin; its box is centred half its height up.
     const auto id = static_cast<InstanceId>(first_walker_ + i);
-    add(look.body, id, proto::OBJECT_CLASS_PEDESTRIAN, walker.position, walker.heading, 0.0, kPedestrianBox.z(),
-        kPedestrianBox, walker.linear_velocity, 0.0);
-    AppendLimbs(items, look, items.back().world_from_model, walker.position.head<2>(), walker.heading,
-                walker.linear_velocity.norm(), id);
+    walker_looks_.Append(items, id, GroundPose(walker.position.head<2>(), walker.heading, 0.0),
+                         walker.position.head<2>(), walker.heading, walker.linear_velocity.norm());
+    label(id, proto::OBJECT_CLASS_PEDESTRIAN, walker.position, walker.heading, kPedestrianBox.z(), kPedestrianBox,
+          walker.linear_velocity, 0.0);
   }
 }
 

@@ -1,7 +1,6 @@
 // What the renderer draws of a map's traffic (server/sim/traffic): parked
 // cars and traffic lights as static labelled objects, and per frame the lit
-// lamp of every light, the moving cars and the walkers (a body and four
-// limbs swinging with their gait, five draw items of one instance). Ids follow the map's
+// lamp of every light, the moving cars and the walkers (walker_looks.h). Ids follow the map's
 // own objects: parked cars, then lights, then moving cars, then walkers.
 #pragma once
 
@@ -14,6 +13,7 @@
 #include "server/render/object_catalog.h"
 #include "server/render/render_types.h"
 #include "server/render/traffic_meshes.h"
+#include "server/render/walker_looks.h"
 #include "server/sim/traffic/traffic_ids.h"
 #include "server/sim/traffic/traffic_state.h"
 
@@ -28,10 +28,11 @@ class TrafficGraphics {
                                        const Eigen::Matrix4f& world_from_model)>;
 
   // `car_half_extents`: the simulated car's box, which traffic cars share;
-  // `car_centre_height`: where that box's centre stands at rest.
+  // `car_centre_height`: where that box's centre stands at rest;
+  // `walker_looks`: the scene's walker meshes (it must outlive this).
   TrafficGraphics(const traffic::TrafficPlan& plan, const traffic::TrafficIds& ids,
-                  const Eigen::Vector3d& car_half_extents, double car_centre_height, const AddMesh& add_mesh,
-                  const AddStatic& add_static);
+                  const Eigen::Vector3d& car_half_extents, double car_centre_height, const WalkerLooks& walker_looks,
+                  const AddMesh& add_mesh, const AddStatic& add_static);
 
   // Appends the lit lamps, moving cars and walkers at `state` and `sim_time`
   // (ids ascending, after every static one). No allocation once warm.
@@ -43,7 +44,6 @@ class TrafficGraphics {
 
  private:
   static constexpr int kCarVariants = 24;  // colour i and style i % kCarStyleCount
-  static constexpr int kWalkerLooks = 6;
 
   const traffic::TrafficPlan& plan_;
   Eigen::Vector3d car_half_extents_;
@@ -52,7 +52,7 @@ class TrafficGraphics {
   std::vector<InstanceId> light_ids_;
   std::array<MeshId, 3> lamp_meshes_{};  // by traffic::Signal
   std::array<MeshId, kCarVariants> car_meshes_{};
-  std::array<WalkerMeshIds, kWalkerLooks> walker_meshes_{};
+  const WalkerLooks& walker_looks_;
   InstanceId first_moving_car_ = 0, first_walker_ = 0, id_bound_ = 0;
 };
 

@@ -49,7 +49,8 @@ cmake --install "$BUILD" --prefix "$PREFIX" > install.log || { cat install.log; 
 for file in bin/sim4cvd bin/sim4cv_mapgen lib/libsim4cv-client.so lib/libsim4cv-client.a include/sim4cv/client.h \
             include/sim4cv/protocol/shm_sync.h include/sim4cv.pb.h lib/cmake/sim4cv/sim4cvConfig.cmake \
             lib/cmake/sim4cv/sim4cvConfigVersion.cmake lib/pkgconfig/sim4cv.pc share/sim4cv/protocol/sim4cv.proto \
-            share/sim4cv/scenes/tracking/easy_urban.map share/sim4cv/studio/index.html share/sim4cv/models/driving; do
+            share/sim4cv/scenes/tracking/easy_urban.map share/sim4cv/studio/index.html share/sim4cv/models/driving \
+            share/sim4cv/ASSETS-ATTRIBUTION.md; do
   [ -e "$PREFIX/$file" ] || fail "cmake --install left out $file"
 done
 
@@ -83,7 +84,7 @@ grep -q 'conffiles' deb-info.txt || fail "the package has no conffiles"
 dpkg-deb -c "$DEB" > deb-files.txt
 for file in ./usr/bin/sim4cvd ./usr/lib/libsim4cv-client.so ./usr/lib/cmake/sim4cv/sim4cvConfig.cmake \
             ./usr/lib/pkgconfig/sim4cv.pc ./usr/lib/systemd/system/sim4cvd.service ./etc/default/sim4cvd \
-            ./usr/share/sim4cv/studio/index.html; do
+            ./usr/share/sim4cv/studio/index.html ./usr/share/sim4cv/ASSETS-ATTRIBUTION.md; do
   grep -q " $file\( \|$\)" deb-files.txt || fail "the .deb lacks $file"
 done
 dpkg -x "$DEB" debroot

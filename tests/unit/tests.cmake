@@ -59,3 +59,5 @@ sim4cv_test(unit driving_model_test sim4cv_driving)  # runs tests/python/driving
 sim4cv_test(unit driving_model_card_test sim4cv_driving)
 sim4cv_test(unit http_transport_test sim4cv_transport)
 sim4cv_test(unit beneath_test sim4cv_common)
+sim4cv_test(unit walker_looks_test sim4cv_map_render)  # the packaged people walkers are drawn with
+sim4cv_test(unit walker_render_test sim4cv_daemon)  # a packaged person's ground truth
