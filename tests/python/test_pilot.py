@@ -44,6 +44,37 @@ def test_the_same_seed_flies_the_same_path_and_another_seed_another():
     assert not np.allclose(a, c)
 
 
+def _fly_losing_the_car(seed, hidden_from, hidden_frames, steps, hz=30.0):
+    """The car drives straight east at 8 m/s; from frame hidden_from on it is wholly hidden for hidden_frames."""
+    pilot = P.Pilot(seed, hz)
+    pilot.start((0.0, 0.0, 0.75), 0.0)
+    rows, poses = [], []
+    for i in range(1, steps):
+        hidden = hidden_from <= i < hidden_from + hidden_frames
+        poses.append(pilot.step((8.0 * i / hz, 0.0, 0.75), 0.0, 0.0 if hidden else 1.0))
+        rows.append(pilot.record())
+    return rows, np.array(poses), pilot
+
+
+def test_the_pilot_climbs_and_recentres_after_losing_the_car_but_only_after_his_reaction_time():
+    # the first 1.5 s are a plain centred follow: no manoeuvre of his own interferes
+    rows, poses, pilot = _fly_losing_the_car(5, 10, 30, 45)
+    regain = [r[-1] for r in rows]
+    assert P.PILOT_HEADER[-1] == "regain" and regain[:9] == [0] * 9
+    first = regain.index(1) + 1  # the step (frame) at which he reacts
+    # he sees the loss after his lag, and waits regain_after_s more before acting
+    assert first >= 10 + pilot.lag_frames + int(pilot.settings.regain_after_s * 30)
+    assert rows[first - 1][1] == 0 and rows[first - 1][2] == 0  # the framing offsets gone: the car centred
+    assert pilot.manoeuvre["altitude"] == 15.0 + pilot.settings.regain_climb  # he climbs, within his limits
+    assert np.diff(poses[first - 1:, 2]).max() <= pilot.settings.max_climb / 30 + 1e-9
+    # a car that was never lost, same seed: no regain, the same path up to the loss
+    rows_seen, poses_seen, _ = _fly_losing_the_car(5, 10, 0, 45)
+    assert all(r[-1] == 0 for r in rows_seen) and np.array_equal(poses_seen[:first - 1], poses[:first - 1])
+    # a loss shorter than his reaction (a car passing under a crown for 3 frames) changes nothing he does
+    _, poses_blink, _ = _fly_losing_the_car(5, 10, 3, 45)
+    assert np.array_equal(poses_blink, poses_seen)
+
+
 def _files(root):
     out = {}
     for folder, _, names in os.walk(root):
@@ -67,7 +98,7 @@ def test_a_piloted_sequence_replays_byte_for_byte(tmp_path):
         else:
             assert a[name] == b[name], name
     meta = metas[0]
-    assert meta["camera_motion"] == "pilot" and meta["camera"] == "pilot" and meta["pilot"]["model"] == "sim4cv.pilot 1"
+    assert meta["camera_motion"] == "pilot" and meta["camera"] == "pilot" and meta["pilot"]["model"] == "sim4cv.pilot 2"
     assert meta["pilot"]["seed"] != spec.seed  # derived from (seed, name): every sequence of a set flies differently
     # the camera moved and the recorded camera poses are the flown ones
     poses = np.genfromtxt(str(tmp_path / "a" / spec.name / "poses.csv"), delimiter=",", names=True)

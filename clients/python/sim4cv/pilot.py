@@ -8,6 +8,14 @@ fast, wind pushes it, and he flies manoeuvres (follow, orbit, fly-by, climb
 or descend) and re-frames the shot on purpose, now and then letting the
 target slide to the frame's edge or out of it.
 
+He reacts to losing the target: when it has been gone from his screen
+(wholly hidden, or out of the frame when he did not look away on purpose)
+for a few frames, which he sees only after his reaction time, he gives up
+the manoeuvre, flies to put the car straight ahead of where the camera
+points, climbs and centres it. That goes through the same lag and limits,
+so it shortens long losses; the short ones (a car passing under a crown
+for a quarter of a second) stay, as do partial occlusions and edge cuts.
+
 The drone here is simulated client-side (a point mass with limited
 acceleration, speed and yaw rate, an Ornstein-Uhlenbeck wind with gusts, a
 gimbal with a limited pitch rate); its camera is a world-fixed daemon camera
@@ -27,7 +35,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-MODEL = "sim4cv.pilot 1"  # sim4cv.sequences.PILOT_MODEL: a sequence made by another model is made again
+MODEL = "sim4cv.pilot 2"  # sim4cv.sequences.PILOT_MODEL: a sequence made by another model is made again
 MANOEUVRES = ("follow", "orbit", "flyby", "climb", "reframe", "look_away")
 
 
@@ -51,6 +59,8 @@ class PilotSettings:
     # manoeuvre weights, in MANOEUVRES' order
     weights: tuple = (0.28, 0.2, 0.14, 0.15, 0.2, 0.03)
     steady_start_s: float = 1.5        # the first seconds: plain follow, target centred
+    regain_after_s: float = 0.15       # the car wholly hidden this long on his (late) screen: re-centre and climb
+    regain_climb: float = 6.0          # m
 
 
 def _wrap(angle):
@@ -83,6 +93,8 @@ class Pilot:
         self.gust_left = 0.0
         self.time = 0.0
         self.manoeuvre = None
+        self.hidden_s = 0.0            # how long the car has been wholly hidden on the pilot's (late) screen
+        self.regaining = False         # pilot.csv's `regain`: he is flying to get the lost car back in view
 
     # ------------------------------------------------------------------ the plan
 
@@ -116,6 +128,9 @@ class Pilot:
             m["altitude"] = _uniform(rng, s.altitude)
             ahead = _uniform(rng, (8, 25))
             side = float(rng.choice([-1, 1])) * _uniform(rng, (4, 14))
+            # the camera must swing round as fast as the car passes: he knows how fast his drone yaws
+            speed = float(np.hypot(*self._perceived()[2][:2]))
+            side = math.copysign(max(abs(side), min(20.0, 1.3 * speed / math.radians(s.max_yaw_rate))), side)
             c, sn = math.cos(target_yaw), math.sin(target_yaw)
             m["point"] = (target[0] + ahead * c - side * sn, target[1] + ahead * sn + side * c)
         elif kind == "reframe":
@@ -141,7 +156,7 @@ class Pilot:
         self.vel = np.zeros(3)
         self.yaw = math.atan2(target[1] - self.pos[1], target[0] - self.pos[0])
         self.pitch = math.atan2(m["altitude"], m["distance"])
-        self.seen.append((target, float(target_yaw)))
+        self.seen.append((target, float(target_yaw), 1.0))
         return self.pose()
 
     def pose(self):
@@ -150,9 +165,9 @@ class Pilot:
 
     def _perceived(self):
         """What the pilot acts on: the target as it was reaction_s ago, and its velocity then."""
-        old, yaw = self.seen[0]
+        old, yaw, visibility = self.seen[0]
         older = self.seen[1][0] if len(self.seen) > 1 else old
-        return old, yaw, (older - old) / self.dt if len(self.seen) > 1 else np.zeros(3)
+        return old, yaw, (older - old) / self.dt if len(self.seen) > 1 else np.zeros(3), visibility
 
     def _wind_step(self):
         s, rng, dt = self.settings, self.rng, self.dt
@@ -168,10 +183,12 @@ class Pilot:
             self.gust_left = _uniform(rng, s.gust_s)
         return self.wind + self.gust
 
-    def step(self, target, target_yaw):
+    def step(self, target, target_yaw, visibility=None):
+        """visibility: the fraction of the target not hidden in the frame just rendered (0: wholly hidden
+        or out of the frame; None: unknown, taken as visible); the pilot sees it late, as the target."""
         s, dt = self.settings, self.dt
         target = np.asarray(target, dtype=float)
-        self.seen.append((target, float(target_yaw)))
+        self.seen.append((target, float(target_yaw), 1.0 if visibility is None else float(visibility)))
         while len(self.seen) > self.lag_frames + 1:
             self.seen.popleft()
         self.time += dt
@@ -179,7 +196,16 @@ class Pilot:
         m["left"] -= dt
         if m["left"] <= 0:
             self.manoeuvre = m = self._new_manoeuvre(target, target_yaw)
-        seen, seen_yaw, seen_vel = self._perceived()
+        seen, seen_yaw, seen_vel, seen_visibility = self._perceived()
+        # the car gone from his screen (not because he looked away on purpose): re-centre it and climb
+        looking_away = m["kind"] == "look_away"
+        self.hidden_s = self.hidden_s + dt if seen_visibility <= 0 and not looking_away else 0.0
+        regain = self.hidden_s > s.regain_after_s
+        if regain and not self.regaining:
+            # he gives up the manoeuvre: the car straight ahead of where the camera points, higher, centred
+            m.update(point=None, rate=0.0, bearing=_wrap(self.yaw + math.pi - seen_yaw), aim_yaw=0.0, aim_pitch=0.0,
+                     altitude=min(m["altitude"] + s.regain_climb, s.altitude[1]),
+                     distance=min(m["distance"], s.distance[1] * 0.6), left=max(m["left"], 1.5))
 
         # where the pilot wants the drone
         if m["point"] is not None:
@@ -198,6 +224,7 @@ class Pilot:
         if horizontal > s.max_accel:
             accel[:2] *= s.max_accel / horizontal
         accel[2] = float(np.clip(accel[2], -s.max_accel, s.max_accel))
+        self.regaining = regain
         self.vel += accel * dt
         speed = math.hypot(self.vel[0], self.vel[1])
         if speed > s.max_speed:
@@ -221,7 +248,8 @@ class Pilot:
         m = self.manoeuvre
         wind = self.wind + self.gust
         return [m["kind"], round(math.degrees(m["aim_yaw"]), 3), round(math.degrees(m["aim_pitch"]), 3),
-                round(float(wind[0]), 4), round(float(wind[1]), 4), round(float(self.gust_left > 0), 0)]
+                round(float(wind[0]), 4), round(float(wind[1]), 4), round(float(self.gust_left > 0), 0),
+                int(self.regaining)]
 
     def description(self):
         """What sequence.json records so a reader knows how the camera flew."""
@@ -229,7 +257,7 @@ class Pilot:
                 "settings": asdict(self.settings)}
 
 
-PILOT_HEADER = ["manoeuvre", "aim_yaw_deg", "aim_pitch_deg", "wind_x", "wind_y", "gust"]
+PILOT_HEADER = ["manoeuvre", "aim_yaw_deg", "aim_pitch_deg", "wind_x", "wind_y", "gust", "regain"]
 
 
 def take_the_camera(client, world, target_id, seed, frame_hz, camera="uav", name="pilot", settings=None):

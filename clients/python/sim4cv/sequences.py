@@ -399,7 +399,7 @@ def generate_sequence(spec, out_root, daemon=None, frame_hook=None, log=None, pr
             if spec.laps and car and laps.update(cpos[0], cpos[1], yaw) >= spec.laps:
                 break
             if pilot is not None and index < cap:
-                client.set_camera_pose(camera, *pilot.step(cpos, yaw))
+                client.set_camera_pose(camera, *pilot.step(cpos, yaw, visibility))
             if frame_hook:
                 frame_hook(client, index, frame)
             now = time.monotonic()
