@@ -88,8 +88,12 @@ def main():
         if a.exit_after == answered:
             os._exit(0)
         if a.flood_after == answered:
+            # 256 lines per write: the client sees far more than it may hold
+            # at once, however slowly a busy machine runs this process.
+            block = '@@TRAX:state "1,2,3,4"\n' * 256
             while True:
-                say('@@TRAX:state "1,2,3,4"')
+                out.write(block)
+                out.flush()
         if a.garbage_after == answered:
             say('@@TRAX:state "12,34')
         elif a.error_after == answered:
