@@ -263,7 +263,7 @@ void ReassemblerSeeds() {
 // Client areas as a client leaves them: the daemon's header, then requests.
 void ShmSeeds() {
   for (int requests : {0, 3, 64}) {
-    sim4cv::transport::ShmClientArea area;
+    sim4cv::transport::ShmClientArea area(-1);  // no socket: only requests are written
     const sim4cv::shm::AreaMap& map = area.map();
     std::vector<Envelope> session = TrackerSession(sim4cv::proto::DELIVERY_NEWEST);
     for (int n = 0; n < requests; ++n) {

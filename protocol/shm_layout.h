@@ -36,8 +36,10 @@ namespace sim4cv::shm {
  *    version 1, which every client could write, are gone).
  * 3: room for 8 channel records (the channel table of protocol/channels.h:
  *    semantic, normals and flow joined RGB, depth and mask); each record
- *    names its element type and components; boxes and entities moved down. */
-SIM4CV_SHM_CONSTANT(kShmLayoutVersion, 3)
+ *    names its element type and components; boxes and entities moved down.
+ * 4: a response longer than a response message travels on the attachment's
+ *    Unix socket, announced in the response ring (ShmResponseMessage.on_socket). */
+SIM4CV_SHM_CONSTANT(kShmLayoutVersion, 4)
 SIM4CV_SHM_CONSTANT(kShmHeaderBytes, 512)
 /* Frame slot: this many bytes of ShmFrameHeader region, then the pixels. */
 SIM4CV_SHM_CONSTANT(kShmFrameHeaderBytes, 8192)
@@ -53,6 +55,12 @@ SIM4CV_SHM_CONSTANT(kShmRequestCapacity, 64)
 SIM4CV_SHM_CONSTANT(kShmResponseMessageBytes, 2048)
 SIM4CV_SHM_CONSTANT(kShmResponseDataBytes, 1984)
 SIM4CV_SHM_CONSTANT(kShmResponseDepth, 8)
+/* A response longer than kShmResponseDataBytes (a Welcome naming many
+ * entities, say) is sent on the client's Unix socket instead: one message of
+ * an 8-byte response number and at most this many bytes of Envelope. 128 KiB
+ * fits the kernel's default socket buffer; a longer response is an Error. */
+SIM4CV_SHM_CONSTANT(kShmSocketResponseBytes, 131072)
+SIM4CV_SHM_CONSTANT(kShmSocketResponseHeaderBytes, 8)
 /* The attach message the daemon sends on the Unix socket. */
 SIM4CV_SHM_CONSTANT(kShmAttachBytes, 256)
 /* Every slot, entry and pixel plane starts on a multiple of this. */
@@ -201,14 +209,20 @@ typedef struct ShmRequestSlot {
 /* One daemon -> client response (2048 bytes). */
 typedef struct ShmResponseMessage {
   uint64_t sequence;     /*  0: 2k+1 while response k is written, 2k+2 once complete */
-  uint32_t size;         /*  8: bytes of data used */
-  uint8_t reserved[52];  /* 12 */
-  uint8_t data[1984];    /* 64: one serialized Envelope */
+  uint32_t size;         /*  8: bytes of the Envelope (in data, or on the socket) */
+  /* 0: data holds the Envelope. 1: it was too long for data, so it is the
+   * client's next socket message tagged with k (kShmSocketResponseBytes);
+   * the daemon sent it before writing this message. */
+  uint32_t on_socket;    /* 12 */
+  uint8_t reserved[48];  /* 16 */
+  uint8_t data[1984];    /* 64: one serialized Envelope (on_socket 0) */
 } ShmResponseMessage;
 
-/* The one message the daemon sends on a client's Unix socket (256 bytes).
+/* The first message the daemon sends on a client's Unix socket (256 bytes).
  * With status 0 it carries three descriptors (SCM_RIGHTS): the frame
- * object, the client's area and its doorbell (an eventfd). */
+ * object, the client's area and its doorbell (an eventfd). Later messages
+ * are long responses: a little-endian u64 response number k, then the
+ * Envelope (ShmResponseMessage.on_socket). */
 typedef struct ShmAttach {
   char magic[8];           /*   0: SIM4CV_SHM_ATTACH_MAGIC */
   uint32_t layout_version; /*   8: kShmLayoutVersion */
@@ -254,6 +268,7 @@ SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAreaHeader, closed) == 148, "ShmAreaHeader.
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmRequestSlot) == 256, "ShmRequestSlot is kShmRequestSlotBytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmRequestSlot, data) == 8, "ShmRequestSlot.data");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmResponseMessage) == 2048, "ShmResponseMessage is kShmResponseMessageBytes");
+SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmResponseMessage, on_socket) == 12, "ShmResponseMessage.on_socket");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmResponseMessage, data) == 64, "ShmResponseMessage.data");
 SIM4CV_SHM_STATIC_ASSERT(sizeof(ShmAttach) == 256, "ShmAttach is kShmAttachBytes");
 SIM4CV_SHM_STATIC_ASSERT(offsetof(ShmAttach, message) == 32, "ShmAttach.message");

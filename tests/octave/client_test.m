@@ -17,6 +17,9 @@ function client_test(tcp, udp, shm, daemon_pid)
   check_bad_input(tcp, udp, shm);
   printf('client_test: bad input passed (%.1f s)\n', toc(t));
   t = tic;
+  check_long_responses(tcp, shm);
+  printf('client_test: long responses over shared memory passed (%.1f s)\n', toc(t));
+  t = tic;
   check_daemon_killed(tcp, udp, shm, daemon_pid);
   printf('client_test: daemon killed mid-session passed (%.1f s)\n', toc(t));
   printf('client_test: all passed\n');
@@ -173,6 +176,29 @@ function check_bad_input(tcp, udp, shm)
   addresses = {tcp, udp, shm};
   for k = 1:3
     expect_error(@() sim4cv_connect(addresses{k}, 'octave-v99', 5000, 99), 'sim4cv:server', 'ERROR_CODE_VERSION_MISMATCH');
+  end
+end
+
+% 40 entities with 63-character names make the Welcome and the State longer
+% than a shared-memory response message: they come over the attachment's
+% socket, whole.
+function check_long_responses(tcp, shm)
+  h = sim4cv_connect(tcp, 'octave-spawner');
+  names = cell(1, 40);
+  for k = 1:40
+    names{k} = sprintf('%-63s', sprintf('octave-uav-with-a-name-as-long-as-allowed-%02d', k));
+    names{k}(names{k} == ' ') = 'x';
+    sim4cv_spawn(h, 'uav', names{k}, -100 + 6 * mod(k, 20), 60 + 6 * floor(k / 20), 25);
+  end
+  sim4cv_subscribe(h, 'uav', {'boxes'}, 'lockstep');
+  sim4cv_frame(h, 'step');   % the published State lists them
+  sim4cv_close(h);
+  for attempt = 1:2
+    hs = sim4cv_connect(shm, sprintf('octave-long-%d', attempt));
+    s = sim4cv_state(hs);
+    missing = setdiff(names, {s.entities.name});
+    check(isempty(missing), 'attachment %d: the State over shared memory lacks %d names, e.g. %s', attempt, numel(missing), strjoin(missing(1:min(end, 1)), ''));
+    sim4cv_close(hs);
   end
 end
 

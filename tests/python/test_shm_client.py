@@ -90,7 +90,7 @@ def test_another_layout_version_is_refused_naming_both(start_transports_daemon):
     with pytest.raises(sim4cv.ShmLayoutError) as info:
         shm_layout.parse_ring_header(header, 10 ** 9)
     assert isinstance(info.value, sim4cv.Sim4cvError)
-    assert "layout version 7" in str(info.value) and "layout version 3" in str(info.value)
+    assert "layout version 7" in str(info.value) and "layout version 4" in str(info.value)
     header[0:8] = b"NOTSIM4C"
     with pytest.raises(sim4cv.ShmLayoutError, match="SIM4CVSM"):
         shm_layout.parse_ring_header(header, 10 ** 9)
@@ -102,6 +102,26 @@ def test_configure_goes_over_a_companion_tcp_connection(start_transports_daemon)
         uav = client.spawn("uav", "uav_b", 5, 5, 20)
         assert any(e.id == uav for e in client.get_world().entities)
         assert client._tcp is not None
+
+
+def test_long_welcomes_and_states_arrive_whole_at_every_attachment(start_transports_daemon):
+    # 60 entities with 63-byte names: a Welcome and a State of several KB,
+    # longer than a response message, come over the attachment's socket.
+    daemon = start_transports_daemon()
+    names = {("uav-with-a-long-name-%03d-" % i).ljust(63, "x") for i in range(60)}
+    with sim4cv.connect(daemon.address("tcp"), name="spawner") as tcp:
+        for i, name in enumerate(sorted(names)):
+            tcp.spawn("uav", name, -100 + 6 * (i % 30), 60 + 6 * (i // 30), 25)
+        tcp.subscribe("uav", ["boxes"], "lockstep")
+        tcp.step_and_receive()  # the published State lists them too
+        assert tcp.welcome.ByteSize() < 2 * shm_layout.RESPONSE_DATA_BYTES  # its Welcome came before them
+    for attempt in range(3):
+        with _shm(daemon) as client:
+            assert client.welcome.ByteSize() > 2 * shm_layout.RESPONSE_DATA_BYTES
+            assert names <= {e.name for e in client.welcome.entities}, "attachment %d" % attempt
+            state = client.get_state()
+            assert names <= {e.name for e in state.entities}
+            assert client.responses_lost == 0
 
 
 def test_idle_client_is_kept_attached_while_waiting_and_reattaches_after_expiry(start_transports_daemon):

@@ -114,7 +114,7 @@ TEST(ShmLayout, DaemonWritesTheDocumentedHeaderAndSealsTheObject) {
   transport::ShmRegion region(Params());
   const ShmHeader& h = region.header();
   EXPECT_EQ(std::string(h.magic, 8), "SIM4CVSM");
-  EXPECT_EQ(h.layout_version, 3u);
+  EXPECT_EQ(h.layout_version, 4u);
   EXPECT_EQ(h.header_bytes, 512u);
   EXPECT_EQ(h.slot_count, 3u);
   EXPECT_EQ(h.camera_width, 40u);
@@ -142,13 +142,17 @@ TEST(ShmLayout, DaemonWritesTheDocumentedHeaderAndSealsTheObject) {
 }
 
 TEST(ShmLayout, ClientAreaIsSealedAgainstResizingOnly) {
-  transport::ShmClientArea area;
+  int sockets[2] = {-1, -1};
+  ASSERT_EQ(socketpair(AF_UNIX, SOCK_SEQPACKET, 0, sockets), 0);
+  transport::ShmClientArea area(sockets[0]);
   EXPECT_EQ(fcntl(area.fd(), F_GET_SEALS), F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL);
   const ShmAreaHeader& h = area.map().header();
   EXPECT_EQ(std::string(h.magic, 8), "SIM4CVCA");
   EXPECT_EQ(h.total_bytes, kAreaBytes);
   EXPECT_EQ(h.request_capacity, 64u);
   EXPECT_EQ(h.response_depth, 8u);
+  close(sockets[0]);
+  close(sockets[1]);
 }
 
 TEST(ShmLayout, RgbOnlyRingIsSmallerAndSaysWhatItCarries) {
@@ -179,7 +183,7 @@ void ExpectOpenFramesFails(const transport::ShmRegion& region, std::initializer_
 TEST(ShmLayout, WrongLayoutVersionIsAClearError) {
   transport::ShmRegion region(Params());
   region.header().layout_version = 99;
-  ExpectOpenFramesFails(region, {"layout version 99", "layout version 3"});
+  ExpectOpenFramesFails(region, {"layout version 99", "layout version 4"});
 }
 
 TEST(ShmLayout, InconsistentHeaderIsAClearError) {

@@ -2,8 +2,11 @@
 // written as docs/protocol.md 13.5 says (by hand here, as a client in another
 // language would) come out in order; a client that breaks the ring's rules is
 // told so and nothing it wrote is followed; responses carry the documented
-// sequence words and never depend on what the client stored.
+// sequence words and never depend on what the client stored; a response too
+// long for the ring goes on the client's socket, tagged, and the ring says so.
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <cstring>
 #include <string>
@@ -24,6 +27,16 @@ std::string Label(int round, uint32_t i) {
   return label;
 }
 
+// A connected pair of SOCK_SEQPACKET sockets: the attachment's, daemon end first.
+struct SocketPair {
+  SocketPair() { EXPECT_EQ(socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, fds), 0); }
+  ~SocketPair() {
+    close(fds[0]);
+    close(fds[1]);
+  }
+  int fds[2] = {-1, -1};
+};
+
 class ShmRequestTest : public ::testing::Test {
  protected:
   // What a client does: write the slot, then a plain release store of the count.
@@ -43,7 +56,8 @@ class ShmRequestTest : public ::testing::Test {
   }
   const shm::AreaMap& map() { return area_.map(); }
 
-  ShmClientArea area_;
+  SocketPair sockets_;
+  ShmClientArea area_{sockets_.fds[0]};
   uint64_t written_ = 0;
   std::string why_;
 };
@@ -95,7 +109,7 @@ TEST_F(ShmRequestTest, ResponsesUseTheDaemonsOwnCounts) {
   for (uint64_t k = 0; k < 10; ++k) {
     proto::Envelope reply;
     reply.mutable_state()->set_frame_id(k);
-    ASSERT_TRUE(area_.Write(reply));
+    ASSERT_EQ(area_.Write(reply), ShmClientArea::Written::kDone);
     const shm::ShmResponseMessage& message = map().response(k);
     EXPECT_EQ(message.sequence, shm::ResponseCompleteSequence(k));
     proto::Envelope parsed;
@@ -104,12 +118,45 @@ TEST_F(ShmRequestTest, ResponsesUseTheDaemonsOwnCounts) {
     EXPECT_EQ(map().header().responses_written, k + 1);
     EXPECT_EQ(map().header().response_futex, k + 1);
   }
-  proto::Envelope large;
-  large.mutable_error()->set_message(std::string(shm::kShmResponseDataBytes, 'x'));
-  EXPECT_FALSE(area_.Write(large));
+  proto::Envelope huge;
+  huge.mutable_error()->set_message(std::string(shm::kShmSocketResponseBytes, 'x'));
+  EXPECT_EQ(area_.Write(huge), ShmClientArea::Written::kTooLarge);
   EXPECT_EQ(map().header().responses_written, 10u);
   area_.MarkClosed();
   EXPECT_EQ(map().header().closed, 1u);
+}
+
+TEST_F(ShmRequestTest, ALongResponseIsTheNextSocketMessageTaggedWithItsNumber) {
+  proto::Envelope small, long_reply;
+  small.mutable_state()->set_frame_id(7);
+  long_reply.mutable_error()->set_message(std::string(5 * shm::kShmResponseDataBytes, 'x'));
+  ASSERT_EQ(area_.Write(small), ShmClientArea::Written::kDone);
+  ASSERT_EQ(area_.Write(long_reply), ShmClientArea::Written::kDone);
+  const shm::ShmResponseMessage& message = map().response(1);
+  EXPECT_EQ(message.sequence, shm::ResponseCompleteSequence(1));
+  EXPECT_EQ(message.on_socket, 1u);
+  EXPECT_EQ(message.size, long_reply.ByteSizeLong());
+  EXPECT_EQ(map().response(0).on_socket, 0u);
+  std::string received(shm::kShmSocketResponseHeaderBytes + shm::kShmSocketResponseBytes, '\0');
+  const ssize_t got = recv(sockets_.fds[1], received.data(), received.size(), MSG_DONTWAIT);
+  ASSERT_EQ(got, static_cast<ssize_t>(shm::kShmSocketResponseHeaderBytes + long_reply.ByteSizeLong()));
+  uint64_t tag = 99;
+  std::memcpy(&tag, received.data(), sizeof tag);
+  EXPECT_EQ(tag, 1u);
+  proto::Envelope parsed;
+  ASSERT_TRUE(parsed.ParseFromArray(received.data() + shm::kShmSocketResponseHeaderBytes,
+                                    static_cast<int>(got) - static_cast<int>(shm::kShmSocketResponseHeaderBytes)));
+  EXPECT_EQ(parsed.error().message(), long_reply.error().message());
+}
+
+TEST_F(ShmRequestTest, ALongResponseThatFindsTheSocketFullIsNotWritten) {
+  proto::Envelope long_reply;
+  long_reply.mutable_error()->set_message(std::string(shm::kShmSocketResponseBytes - 16, 'x'));
+  uint64_t written = 0;
+  while (area_.Write(long_reply) == ShmClientArea::Written::kDone) {
+    ASSERT_LT(++written, 100u) << "the socket never filled";
+  }
+  EXPECT_EQ(map().header().responses_written, written) << "a refused response takes no ring entry";
 }
 
 }  // namespace

@@ -224,6 +224,7 @@ class ShmClient(BaseClient):
             raise
         os.close(fds[0])
         os.close(fds[1])
+        sock.setblocking(False)  # long responses are read only once the ring says they are there
         self._sock, self._area, self._doorbell = sock, area, fds[2]
         self._area64 = np.frombuffer(area, dtype="<u8")
         self._area32 = np.frombuffer(area, dtype="<u4")
@@ -311,16 +312,22 @@ class ShmClient(BaseClient):
             if written - self._responses > L.RESPONSE_DEPTH:
                 self.responses_lost += written - L.RESPONSE_DEPTH - self._responses
                 self._responses = written - L.RESPONSE_DEPTH
+                self._discard_long_responses_before(self._responses)
             k = self._responses
             base = L.RESPONSE_OFFSET + (k % L.RESPONSE_DEPTH) * L.RESPONSE_MESSAGE_BYTES
             s1 = int(words[base // 8])
-            size = min(struct.unpack_from("<I", area, base + 8)[0], L.RESPONSE_DATA_BYTES)
-            data = area[base + L.RESPONSE_DATA_OFFSET:base + L.RESPONSE_DATA_OFFSET + size]
+            size, on_socket = struct.unpack_from("<II", area, base + 8)
+            data = b"" if on_socket else \
+                area[base + L.RESPONSE_DATA_OFFSET:base + L.RESPONSE_DATA_OFFSET + min(size, L.RESPONSE_DATA_BYTES)]
             if s1 != 2 * k + 2 or int(words[base // 8]) != s1:
                 continue  # being written, or overwritten while copied: look again
             self._responses += 1
+            if on_socket:
+                data = self._long_response(k, size)
             env = pb.Envelope()
             try:
+                if data is None:
+                    raise ValueError("response %d is not on the socket" % k)
                 env.ParseFromString(data)
             except Exception:
                 self.responses_lost += 1
@@ -330,6 +337,38 @@ class ShmClient(BaseClient):
                 self._keepalive_states -= 1  # the answer to a keep-alive GetState
                 continue
             self._replies.append((kind, getattr(env, kind) if kind else None))
+
+    def _discard_long_responses_before(self, k):
+        """After falling a lap behind: drops the socket messages of responses
+        the ring overwrote, so they no longer fill the socket."""
+        while True:
+            try:
+                head = self._sock.recv(L.SOCKET_RESPONSE_HEADER_BYTES, socket.MSG_DONTWAIT | socket.MSG_PEEK)
+            except OSError:
+                return
+            if len(head) != L.SOCKET_RESPONSE_HEADER_BYTES or struct.unpack("<Q", head)[0] >= k:
+                return
+            self._sock.recv(L.SOCKET_RESPONSE_HEADER_BYTES, socket.MSG_DONTWAIT)  # the rest goes too
+
+    def _long_response(self, k, size):
+        """Response k's Envelope from the socket, where the ring says it is
+        (the daemon sent it before announcing it); None if it is not there."""
+        if size > L.SOCKET_RESPONSE_BYTES:
+            return None  # a daemon never announces one: nothing is allocated for it
+        while True:
+            try:
+                # The buffer is this client's own bound, never what the peer claims.
+                message, _, flags, _ = self._sock.recvmsg(
+                    L.SOCKET_RESPONSE_HEADER_BYTES + L.SOCKET_RESPONSE_BYTES, 0, socket.MSG_DONTWAIT)
+            except OSError:
+                return None
+            if len(message) < L.SOCKET_RESPONSE_HEADER_BYTES or flags & socket.MSG_TRUNC:
+                return None
+            tag = struct.unpack_from("<Q", message)[0]
+            if tag < k:
+                continue  # its response was overwritten in the ring before we read it
+            body = message[L.SOCKET_RESPONSE_HEADER_BYTES:]
+            return body if tag == k and len(body) == size else None
 
     def _raise_errors(self):
         for item in list(self._replies):

@@ -1,4 +1,4 @@
-"""The byte layout of sim4cvd's shared memory, layout version 3
+"""The byte layout of sim4cvd's shared memory, layout version 4
 (protocol/shm_layout.h, docs/protocol.md section 13), and the futex call.
 
 Every address the client uses comes from the geometry parse_ring_header()
@@ -13,7 +13,7 @@ from typing import Dict, NamedTuple
 from ._proto import pb
 from .errors import ShmLayoutError
 
-LAYOUT_VERSION = 3
+LAYOUT_VERSION = 4
 MAGIC = b"SIM4CVSM"
 AREA_MAGIC = b"SIM4CVCA"
 ATTACH_MAGIC = b"SIM4CVAT"
@@ -52,6 +52,11 @@ RESPONSE_DEPTH = 8
 RESPONSE_MESSAGE_BYTES = 2048
 RESPONSE_DATA_OFFSET = 64
 RESPONSE_DATA_BYTES = 1984
+# A response message's on_socket word: 1 when its Envelope (`size` bytes) is
+# the next socket message, after an 8-byte response number; at most this long.
+OFF_RESPONSE_ON_SOCKET = 12
+SOCKET_RESPONSE_HEADER_BYTES = 8
+SOCKET_RESPONSE_BYTES = 131072
 AREA_BYTES = (RESPONSE_OFFSET + RESPONSE_DEPTH * RESPONSE_MESSAGE_BYTES + 4095) // 4096 * 4096  # 36864
 OFF_REQUEST_WRITE, OFF_REQUEST_READ, OFF_RESPONSES_WRITTEN = 64, 128, 136
 OFF_RESPONSE_FUTEX, OFF_AREA_CLOSED = 144, 148

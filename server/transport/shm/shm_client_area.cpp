@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/mman.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -11,7 +12,7 @@
 
 namespace sim4cv::transport {
 
-ShmClientArea::ShmClientArea() {
+ShmClientArea::ShmClientArea(int socket) : socket_(socket) {
   map_ = shm::AreaMap(CreateSealableMemory("sim4cv-client", shm::kAreaBytes, fd_));
   try {
     // The client may write anything into it, but never change its size: no SIGBUS for the daemon.
@@ -70,21 +71,41 @@ ShmClientArea::Take ShmClientArea::Next(const uint8_t*& data, uint32_t& size, st
   return Take::kMessage;
 }
 
-bool ShmClientArea::Write(const proto::Envelope& reply) {
+ShmClientArea::Written ShmClientArea::Write(const proto::Envelope& reply) {
   const std::size_t size = reply.ByteSizeLong();
-  if (size > shm::kShmResponseDataBytes) return false;
+  if (size <= shm::kShmResponseDataBytes) {
+    Publish(reply, static_cast<uint32_t>(size), false);
+    return Written::kDone;
+  }
+  if (size > shm::kShmSocketResponseBytes) return Written::kTooLarge;
+  // The socket message first: once the ring announces it, it is in the
+  // client's receive queue (a Unix socket's send is the peer's receive).
+  long_response_.resize(shm::kShmSocketResponseHeaderBytes + size);
+  const uint64_t k = written_;  // little-endian, like every shared number
+  std::memcpy(long_response_.data(), &k, sizeof k);
+  reply.SerializeWithCachedSizesToArray(reinterpret_cast<uint8_t*>(long_response_.data()) + sizeof k);
+  // Never waits: a client that leaves its socket full gets an Error instead.
+  if (send(socket_, long_response_.data(), long_response_.size(), MSG_DONTWAIT | MSG_NOSIGNAL) !=
+      static_cast<ssize_t>(long_response_.size())) {
+    return Written::kSocketFull;
+  }
+  Publish(reply, static_cast<uint32_t>(size), true);
+  return Written::kDone;
+}
+
+void ShmClientArea::Publish(const proto::Envelope& reply, uint32_t size, bool on_socket) {
   const uint64_t k = written_;
   shm::ShmResponseMessage& message = map_.response(k);
   auto sequence = shm::Atomic(message.sequence);
   sequence.store(shm::ResponseWritingSequence(k), std::memory_order_relaxed);
   std::atomic_thread_fence(std::memory_order_release);
-  message.size = static_cast<uint32_t>(size);
-  reply.SerializeWithCachedSizesToArray(message.data);
+  message.size = size;
+  message.on_socket = on_socket ? 1 : 0;
+  if (!on_socket) reply.SerializeWithCachedSizesToArray(message.data);
   sequence.store(shm::ResponseCompleteSequence(k), std::memory_order_release);
   written_ = k + 1;
   shm::Atomic(map_.header().responses_written).store(written_, std::memory_order_release);
   shm::StoreAndWake(map_.header().response_futex, ++futex_);
-  return true;
 }
 
 void ShmClientArea::MarkClosed() {

@@ -51,14 +51,18 @@ std::string ShmClientLink::fatal_message() const {
 }
 
 void ShmClientLink::Write(const proto::Envelope& reply) {
-  if (area_->Write(reply)) return;
+  const ShmClientArea::Written written = area_->Write(reply);
+  if (written == ShmClientArea::Written::kDone) return;
   counters_.Add("shm.responses_too_large");
+  const std::string why =
+      written == ShmClientArea::Written::kTooLarge
+          ? "the reply is " + std::to_string(reply.ByteSizeLong()) + " bytes, more than the " +
+                std::to_string(shm::kShmSocketResponseBytes) + " a shared-memory response may have; ask for it over TCP"
+          : "the reply is " + std::to_string(reply.ByteSizeLong()) +
+                " bytes, too long for the response ring, and this client's socket still holds earlier long replies "
+                "it has not read; read them (or ask over TCP)";
   proto::Envelope refusal;
-  session::ClientProtocol::Refuse(proto::ERROR_CODE_INVALID_STATE,
-                                  "the reply is " + std::to_string(reply.ByteSizeLong()) + " bytes, more than the " +
-                                      std::to_string(shm::kShmResponseDataBytes) +
-                                      " a shared-memory response holds; ask for it over TCP",
-                                  false, refusal);
+  session::ClientProtocol::Refuse(proto::ERROR_CODE_INVALID_STATE, why, false, refusal);
   area_->Write(refusal);
 }
 

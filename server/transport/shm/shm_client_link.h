@@ -9,9 +9,10 @@
 // (OfferReply). The ring's frames are published on the sim thread as they are
 // offered, so writing the reply there too is the only way it can be visible
 // before the next frame without the sim thread waiting for the shm thread.
-// Like publishing a frame it is a copy into shared memory and a futex wake,
-// never I/O; a mutex keeps the area's two writers apart, held by either only
-// while one response (at most 2 KiB) is written.
+// Like publishing a frame it is a copy into shared memory and a futex wake;
+// a response too long for the ring is one non-blocking send on the client's
+// socket (a copy into the kernel, never a wait). A mutex keeps the area's two
+// writers apart, held by either only while one response is written.
 #pragma once
 
 #include <atomic>
@@ -62,7 +63,8 @@ class ShmClientLink : public session::ClientLink {
   // which closed the link.
   bool Send(const proto::Envelope& reply);
   // With mutex_ held, open: writes `reply`, or an Error naming its size if it
-  // does not fit in a response message.
+  // cannot be sent (longer than a shared-memory response may be, or the
+  // client's socket is full of long responses it has not read).
   void Write(const proto::Envelope& reply);
 
   std::shared_ptr<ShmClientArea> area_;  // kept mapped while the sim thread may still hold this link

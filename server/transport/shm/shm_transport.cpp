@@ -220,7 +220,7 @@ class ShmTransport : public Transport {
     auto a = std::make_unique<Attachment>();
     a->socket = connection;
     try {
-      a->area = std::make_shared<ShmClientArea>();
+      a->area = std::make_shared<ShmClientArea>(connection);
     } catch (const std::exception& error) {
       LOG_INFO("shared-memory attach refused: " << error.what());
       ShmListener::Refuse(connection, std::string("sim4cvd refused: ") + error.what());

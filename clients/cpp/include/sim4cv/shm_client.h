@@ -198,6 +198,12 @@ class ShmClient {
   void Detach();             // unmaps the area, closes the socket and doorbell
   void MapFrames(int fd, uint64_t bytes);
   bool TryReadResponse(proto::Envelope& reply);
+  // Response `k`, `size` bytes, that the ring says is on the socket; false
+  // (the response is lost) if the socket does not hold it.
+  bool ReceiveLongResponse(uint64_t k, uint32_t size, proto::Envelope& reply);
+  // After falling a lap behind: drops the socket messages of responses before
+  // `k`, which the ring overwrote, so they no longer fill the socket.
+  void DiscardLongResponsesBefore(uint64_t k);
   bool NextResponse(proto::Envelope& reply, Deadline deadline);  // from shared memory, not pending_
   bool ReceiveKind(proto::Envelope::KindCase kind, proto::Envelope& out, Deadline deadline);
   // Throws ConnectionError unless attached; `check_socket` also asks the
@@ -219,6 +225,7 @@ class ShmClient {
   std::chrono::microseconds spin_{0};
   std::deque<proto::Envelope> pending_;
   std::string scratch_;
+  std::vector<uint8_t> long_response_;  // a socket message: at most kShmSocketResponse(Header)Bytes
 };
 
 }  // namespace sim4cv

@@ -100,20 +100,56 @@ bool ShmClient::TryReadResponse(Envelope& reply) {
     if (written - next_response_ > shm::kShmResponseDepth) {  // we fell a lap behind: the oldest are gone
       responses_lost_ += written - shm::kShmResponseDepth - next_response_;
       next_response_ = written - shm::kShmResponseDepth;
+      DiscardLongResponsesBefore(next_response_);
     }
     shm::ShmResponseMessage& message = area.response(next_response_);
     const uint64_t before = shm::Atomic(message.sequence).load(std::memory_order_acquire);
-    const uint32_t size = std::min<uint32_t>(message.size, shm::kShmResponseDataBytes);
-    scratch_.assign(reinterpret_cast<const char*>(message.data), size);
+    const uint32_t size = message.size;
+    const bool on_socket = message.on_socket != 0;
+    if (!on_socket) {
+      scratch_.assign(reinterpret_cast<const char*>(message.data), std::min<uint32_t>(size, shm::kShmResponseDataBytes));
+    }
     std::atomic_thread_fence(std::memory_order_acquire);
     const bool intact = before == shm::ResponseCompleteSequence(next_response_) &&
                         shm::Atomic(message.sequence).load(std::memory_order_relaxed) == before;
     if (!intact) continue;  // overwritten while we copied: re-evaluate
-    ++next_response_;
-    if (reply.ParseFromString(scratch_)) return true;
+    const uint64_t k = next_response_++;
+    if (on_socket ? ReceiveLongResponse(k, size, reply) : reply.ParseFromString(scratch_)) return true;
     ++responses_lost_;  // cannot happen with an intact copy of a daemon's response
   }
   return false;
+}
+
+void ShmClient::DiscardLongResponsesBefore(uint64_t k) {
+  for (;;) {
+    uint64_t tag = 0;
+    const ssize_t got = recv(socket_, &tag, sizeof tag, MSG_DONTWAIT | MSG_PEEK);
+    if (got != static_cast<ssize_t>(sizeof tag) || tag >= k) return;
+    [[maybe_unused]] const auto dropped = recv(socket_, &tag, sizeof tag, MSG_DONTWAIT);  // the rest goes too
+  }
+}
+
+bool ShmClient::ReceiveLongResponse(uint64_t k, uint32_t size, Envelope& reply) {
+  if (size > shm::kShmSocketResponseBytes) return false;  // a daemon never announces one
+  // Sized by this client's own bound, never by what the peer claims.
+  long_response_.resize(shm::kShmSocketResponseHeaderBytes + shm::kShmSocketResponseBytes);
+  for (;;) {
+    iovec data{long_response_.data(), long_response_.size()};
+    msghdr message{};
+    message.msg_iov = &data;
+    message.msg_iovlen = 1;
+    // The daemon sent it before announcing it in the ring: it is here already.
+    const ssize_t got = recvmsg(socket_, &message, MSG_DONTWAIT);
+    if (got < static_cast<ssize_t>(shm::kShmSocketResponseHeaderBytes) || (message.msg_flags & MSG_TRUNC) != 0) {
+      return false;
+    }
+    uint64_t tag = 0;
+    std::memcpy(&tag, long_response_.data(), sizeof tag);
+    if (tag < k) continue;  // its response was overwritten in the ring before this client read it
+    const auto body = static_cast<std::size_t>(got) - shm::kShmSocketResponseHeaderBytes;
+    return tag == k && body == size &&
+           reply.ParseFromArray(long_response_.data() + shm::kShmSocketResponseHeaderBytes, static_cast<int>(body));
+  }
 }
 
 bool ShmClient::NextResponse(Envelope& reply, Deadline deadline) {
