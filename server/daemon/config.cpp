@@ -194,6 +194,10 @@ Camera effects (docs/protocol.md, "Camera effects"; all off by default, a lens d
                             the scene name)
   --logs-dir DIR            where clients' StartLog writes run logs (the studio's "start log");
                             default: none, StartLog is refused
+  --log-max-bytes N         a run log (--log or StartLog) is closed once its file reaches N bytes
+                            (default 2147483648; 1024 ... 2^50)
+  --log-max-seconds S       ... or once its records span S simulated seconds (default 21600: six
+                            hours; 1 ... 31536000)
   --replay FILE             the car and the UAV follow the poses of the run log FILE frame by frame
                             instead of physics, then hold the last pose; same scene and --frame-hz
   --replay-only IDS         with --replay, only these entities (e.g. 1: the target car) follow the
@@ -302,6 +306,10 @@ std::optional<Config> ParseFlags(const std::vector<std::string>& args, std::stri
       {"--log", [&](auto&, auto& v) { config.log_file = v; }},
       {"--log-label", [&](auto&, auto& v) { config.log_label = v; }},
       {"--logs-dir", [&](auto&, auto& v) { config.logs_dir = v; }},
+      {"--log-max-bytes",
+       [&](auto& f, auto& v) { config.log_max_bytes = ParseNumber<uint64_t>(f, v, 1024, uint64_t{1} << 50); }},
+      {"--log-max-seconds",
+       [&](auto& f, auto& v) { config.log_max_seconds = ParseNumber<double>(f, v, 1, 31536000); }},
       {"--replay", [&](auto&, auto& v) { config.replay_file = v; }},
       {"--replay-only", [&](auto& f, auto& v) { config.replay_only = ParseIdList(f, v); }},
       {"--conditions",

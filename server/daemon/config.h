@@ -91,6 +91,11 @@ struct Config {
   std::string log_file;               // empty: no run log
   std::string log_label;              // the log header's label; empty: the scene name
   std::string logs_dir;               // where StartLog writes; empty: StartLog is refused
+  // Every run log (--log's and StartLog's) is closed once its file reaches
+  // this size or its records span this many simulated seconds, so a log
+  // nobody stops (~138 KB/s of the default scene) cannot fill the disk.
+  uint64_t log_max_bytes = uint64_t{2} << 30;
+  double log_max_seconds = 6 * 3600.0;
   std::string replay_file;            // empty: simulate
   std::vector<uint32_t> replay_only;  // entity ids that follow the log; empty: all (physics is not stepped)
 

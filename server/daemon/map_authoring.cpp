@@ -54,7 +54,7 @@ std::string GeneratedMapText(const proto::GenerateMap& request) {
     throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, std::string("GenerateMap: ") + error.what());
   }
   // What the generator made must pass the parser every client's map passes
-  // (a dense layout can exceed the road-tile limit, for one).
+  // (a client's layout can exceed the road-tile limit, for one; generated roads never do).
   CheckMapText(text, "GenerateMap made a map the parser refuses (try a smaller grid or another seed)");
   return text;
 }

@@ -1,6 +1,7 @@
 #include "server/daemon/run_logger.h"
 
 #include <chrono>
+#include <sstream>
 
 #include "server/common/check.h"
 #include "server/common/diagnostics.h"
@@ -64,14 +65,20 @@ RunLogger::RunLogger(const Config& config, const sim::Scene& scene, const sim::S
                      session::Counters& counters)
     : counters_(counters),
       traffic_ids_(sim::TrafficIdsOf(scene)),
-      writer_(std::make_unique<runlog::RunLogWriter>(config.log_file, MakeHeader(config, scene, initial))) {}
+      writer_(std::make_unique<runlog::RunLogWriter>(config.log_file, MakeHeader(config, scene, initial))),
+      max_bytes_(config.log_max_bytes),
+      max_seconds_(config.log_max_seconds),
+      start_sim_time_(initial.sim_time) {}
 
 RunLogger::RunLogger(Fd log_fd, const Config& config, const sim::Scene& scene, const sim::State& initial,
                      session::Counters& counters)
     : counters_(counters),
       traffic_ids_(sim::TrafficIdsOf(scene)),
       writer_(std::make_unique<runlog::RunLogWriter>(log_fd.release(), config.log_file,
-                                                     MakeHeader(config, scene, initial))) {}
+                                                     MakeHeader(config, scene, initial))),
+      max_bytes_(config.log_max_bytes),
+      max_seconds_(config.log_max_seconds),
+      start_sim_time_(initial.sim_time) {}
 
 void RunLogger::OfferFrame(const session::FrameRef& frame) {
   for (const render::GroundTruthBox& box : frame->boxes) {
@@ -108,6 +115,16 @@ void RunLogger::Append(const sim::State& state, const session::Scheduler& schedu
     } catch (const std::exception& error) {
       Fail(error);
     }
+    if (writer_ && writer_->bytes_written() >= max_bytes_) {
+      EndAtCap("it reached " + std::to_string(writer_->bytes_written()) + " bytes (daemon flag --log-max-bytes " +
+                   std::to_string(max_bytes_) + ")",
+               state.frame_id);
+    } else if (writer_ && state.sim_time - start_sim_time_ >= max_seconds_) {
+      std::ostringstream cap;
+      cap << "its records span " << state.sim_time - start_sim_time_
+          << " simulated seconds (daemon flag --log-max-seconds " << max_seconds_ << ")";
+      EndAtCap(cap.str(), state.frame_id);
+    }
     append_ns_ +=
         std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count();
   }
@@ -136,7 +153,21 @@ void RunLogger::Fail(const std::exception& error) {
   // stays readable; the simulation must not stop for a full disk.
   LOG_ERROR(error.what() << "; run logging stopped, the simulation goes on");
   counters_.Add("log.write_errors");
+  end_ = End{proto::ERROR_CODE_IO, std::string(error.what()) +
+                                       "; the log was closed, its records so far are whole and readable and the "
+                                       "simulation goes on (StartLog starts a new log)"};
   writer_.reset();
+}
+
+void RunLogger::EndAtCap(const std::string& cap, uint64_t frame_id) {
+  const std::string path = writer_->path();
+  Close();
+  if (end_) return;  // closing failed: Fail said why
+  counters_.Add("log.capped");
+  end_ = End{proto::ERROR_CODE_INVALID_STATE, "the run log " + path + " was closed after frame " +
+                                                  std::to_string(frame_id) + ": " + cap +
+                                                  "; it is whole and readable (StartLog starts a new log)"};
+  LOG_WARNING(end_->message);
 }
 
 std::shared_ptr<const runlog::ReplayTrack> LoadReplayTrack(const Config& config, const sim::Scene& scene) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "server/common/beneath.h"
@@ -24,7 +25,9 @@ namespace sim4cv::daemon {
 // it sees every camera frame as it is rendered and keeps the target's
 // ground-truth box; Append then writes the frame's record with one write().
 // A failed write never stops the simulation: it logs one error, counts
-// log.write_errors and stops logging.
+// log.write_errors and stops logging. Reaching --log-max-bytes or
+// --log-max-seconds closes the log the same way, whole. Either way end()
+// then says why, for the client that started it.
 class RunLogger final : public session::ClientLink {
  public:
   // Creates (truncates) config.log_file and writes the header. Throws naming
@@ -44,20 +47,33 @@ class RunLogger final : public session::ClientLink {
   // tracker box (with the camera it subscribes to), the boxes gathered by
   // OfferFrame since the last Append, and the car's command.
   void Append(const sim::State& state, const session::Scheduler& scheduler);
-  // False once closed or after a write failed.
+  // False once closed, after a write failed or at a cap.
   bool open() const { return writer_ != nullptr; }
+  // Why the log ended by itself (a failed write, a cap); nullopt while open
+  // and after Close.
+  struct End {
+    proto::ErrorCode code;  // IO for a failed write, INVALID_STATE for a cap
+    std::string message;    // names the file and the cause
+  };
+  const std::optional<End>& end() const { return end_; }
   // Closes the file and logs what was written and what it cost the sim
   // thread. Idempotent; the destructor closes too, silently.
   void Close();
 
  private:
   void Fail(const std::exception& error);
+  // Closes the log at a cap: `cap` names it and its flag.
+  void EndAtCap(const std::string& cap, uint64_t frame_id);
 
   session::Counters& counters_;
   traffic::TrafficIds traffic_ids_;               // the map traffic's entity ids, logged with the entities
   std::unique_ptr<runlog::RunLogWriter> writer_;  // null once closed or failed
   runlog::FrameLogRecord record_;                 // reused: no allocation per frame once warm
   int64_t append_ns_ = 0;                         // time spent in Append, for the closing line
+  uint64_t max_bytes_;                            // --log-max-bytes
+  double max_seconds_;                            // --log-max-seconds
+  double start_sim_time_;                         // of the world when the log began
+  std::optional<End> end_;
 };
 
 // Reads the whole of config.replay_file. Throws naming the file if it is

@@ -195,11 +195,12 @@ void SimThread::ApplyCommands() {
                    [&](session::StepCommand&) { scheduler_.AddStep(client); },
                    [&](session::ControlsCommand& c) { ApplyControls(client, c); },
                    [&](session::TrackerOutputCommand& c) { ApplyTrackerOutput(client, c); },
-                   [&](session::ConfigureCommand& c) { Configure(c); },
+                   [&](session::ConfigureCommand& c) { Configure(client, c); },
                    [&](session::DisconnectCommand&) {
                      scheduler_.Remove(client);
                      drivers_.Release(client);
                      ForgetTrackerReport(sim_.state(), client);
+                     LogOwnerLeft(client);
                    },
                },
                command.body);
@@ -256,7 +257,7 @@ void SimThread::ApplyTrackerOutput(session::ClientId client, session::TrackerOut
 // and the world stays as it was: Simulation::Apply changes nothing when it
 // throws, and the graphics a change needs are built before the change is
 // committed (Undo() otherwise), so what is rendered always matches the world.
-void SimThread::Configure(session::ConfigureCommand& command) {
+void SimThread::Configure(session::ClientId client, session::ConfigureCommand& command) {
   proto::Envelope reply;
   const uint64_t request_id = command.request.request_id();
   const auto refuse = [&](proto::ErrorCode code, const std::string& message) {
@@ -272,7 +273,7 @@ void SimThread::Configure(session::ConfigureCommand& command) {
     }
     if (command.request.has_start_log() || command.request.has_stop_log()) {
       answer.set_request_id(command.request.request_id());
-      ConfigureLog(command.request, answer);
+      ConfigureLog(client, command.link, command.request, answer);
       directory_.Publish(answer.world());  // its log_file, as later answers see it
       if (command.link) command.link->OfferReply(std::move(reply));
       return;
@@ -362,15 +363,7 @@ void SimThread::AdvanceFrame() {
   if (logger_) {
     logger_->Append(state, scheduler_);
     scheduler_.ReleaseFrames();  // only now, with the record written, may clients see the frames
-    if (!logger_->open()) {
-      // A write failed (full disk, file size limit): the log is closed and
-      // no longer counts as written, so LoadMap, Reset and SetConditions
-      // are allowed again and WorldInfo.log_file says "" from now on.
-      scheduler_.SetObserver(nullptr);
-      logger_.reset();
-      sim_.SetLogFile("");
-      PublishWorld();
-    }
+    AfterLogAppend();
   }
 }
 

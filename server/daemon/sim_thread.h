@@ -59,9 +59,20 @@ class SimThread {
   // Records a tracker's box (the servo of a kTrack UAV steers by it), or
   // answers the client an Error saying why not.
   void ApplyTrackerOutput(session::ClientId client, session::TrackerOutputCommand& output);
-  void Configure(session::ConfigureCommand& command);
+  void Configure(session::ClientId client, session::ConfigureCommand& command);
   // StartLog and StopLog (sim_thread_log.cpp): the sim thread owns the log.
-  void ConfigureLog(const proto::Configure& request, proto::Configured& answer);
+  // `client` started it (with `link`), and unless StartLog.detach the log
+  // ends when that client leaves (LogOwnerLeft).
+  void ConfigureLog(session::ClientId client, const std::shared_ptr<session::ClientLink>& link,
+                    const proto::Configure& request, proto::Configured& answer);
+  // After a frame's record: a log that ended by itself (a failed write, a
+  // cap) is dropped and the client that started it told why.
+  void AfterLogAppend();
+  // A client left: the log it started (without detach) is closed whole.
+  void LogOwnerLeft(session::ClientId client);
+  // The log is closed: forget it, so LoadMap, Reset and SetConditions are
+  // allowed again and WorldInfo.log_file says "".
+  void DropLog();
   // Tells the scheduler and the clients what `change` did; `world` is the
   // answer's WorldInfo. The graphics are already built for it.
   void AfterChange(const Simulation::Change& change, const proto::WorldInfo& world);
@@ -89,6 +100,11 @@ class SimThread {
   Simulation sim_;
   CarDrivers drivers_;                 // who drives which car with Controls; --controls-timeout-ms
   std::unique_ptr<RunLogger> logger_;  // --log's or StartLog's, else null; the scheduler's observer
+  // Who started the StartLog log (0: --log's, or none), their link while
+  // they are connected, and whether the log outlives them (StartLog.detach).
+  session::ClientId log_owner_ = 0;
+  std::shared_ptr<session::ClientLink> log_owner_link_;
+  bool log_detached_ = false;
   std::unique_ptr<AuthoringWorker> authoring_;  // CheckMap, GenerateMap, SaveMap, OpenMap, ListMaps; null once stopped
   session::Scheduler scheduler_;
   std::vector<session::Command> drained_;

@@ -1,7 +1,7 @@
 // A run log a client started that the disk cannot hold (here the daemon's
 // file size limit, RLIMIT_FSIZE, which fails writes as a full disk does):
 // the daemon closes the log, says so (its error line, WorldInfo.log_file
-// empty again), keeps what was written readable, and no longer refuses
+// empty again), tells the client that started it, keeps what was written readable, and no longer refuses
 // LoadMap as if the log were still written.
 #include <sys/resource.h>
 
@@ -23,7 +23,17 @@ TEST_F(RunLogFullDiskTest, AFailedWriteClosesTheLogAndLoadMapIsAllowedAgain) {
   proto::Configure start;
   start.mutable_start_log()->set_name("full");
   EXPECT_EQ(client->Configure(start).log_file(), logs / "full.s4log");
-  for (int i = 0; i < 200 && !client->GetWorld().log_file().empty(); ++i) client->StepAndReceive();
+  std::string told;  // the Error the client that started the log gets
+  for (int i = 0; i < 200 && told.empty(); ++i) {
+    try {
+      client->StepAndReceive();
+    } catch (const ServerError& error) {
+      EXPECT_EQ(error.code(), proto::ERROR_CODE_IO);
+      EXPECT_FALSE(error.fatal());
+      told = error.what();
+    }
+  }
+  EXPECT_NE(told.find("full.s4log: write record: File too large; the log was closed"), std::string::npos) << told;
   EXPECT_EQ(client->GetWorld().log_file(), "") << "the log still counts as written after its writes failed";
   EXPECT_NE(daemon_->stderr_text().find("run logging stopped, the simulation goes on"), std::string::npos);
   EXPECT_EQ(client->LoadMapByName("tracking/easy_desert").scene_name(), "tracking_easy_desert");

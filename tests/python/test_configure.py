@@ -3,6 +3,8 @@ and the methods built on it) against the real sim4cvd (fixtures: conftest.py).
 Default scene: car 1 drives the road loop, UAV 2 films it."""
 
 import math
+import os
+import time
 
 import pytest
 
@@ -242,3 +244,25 @@ def test_camera_effects_keep_the_boxes_on_the_mask_and_bad_ones_are_refused(conn
             "SetEffects.motion_blur 1.5 is outside 0..1 frames")
     refused(lambda: client.set_effects(k1=-0.9), pb.ERROR_CODE_INVALID_ARGUMENT, "folds the image")
     assert client.get_world().effects.k1 == -0.2, "nothing changed"
+
+
+def test_a_run_log_ends_with_its_client_unless_detached(start_daemon, connect, tmp_path):
+    own = start_daemon("--logs-dir", str(tmp_path), "--mode", "realtime")
+    owner = connect("owner", target=own)
+    path = owner.start_log("runs/owned")
+    owner.close()
+    other = connect("other", target=own)
+    deadline = time.monotonic() + 60
+    while other.get_world().log_file and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert other.get_world().log_file == ""
+    other.reset()  # allowed again: no log is written
+    size = os.path.getsize(path)
+    time.sleep(0.5)
+    assert os.path.getsize(path) == size and open(path, "rb").read(8) == b"S4CVLOG\0"
+    kept = other.start_log("runs/detached", detach=True)
+    other.close()
+    third = connect("third", target=own)
+    time.sleep(0.5)
+    assert third.get_world().log_file == kept
+    assert third.stop_log() == kept

@@ -19,12 +19,15 @@
 
 #include "protocol/framing.h"
 
-// Counts heap allocations per thread, to prove the warm frame path has none.
+// Counts heap allocations and their bytes per thread, to prove the warm
+// frame path has none and a lying length prefix costs little.
 namespace {
 thread_local std::size_t t_allocations = 0;
+thread_local std::size_t t_allocated_bytes = 0;
 }
 void* operator new(std::size_t size) {
   ++t_allocations;
+  t_allocated_bytes += size;
   if (void* memory = std::malloc(size == 0 ? 1 : size)) return memory;
   throw std::bad_alloc();
 }
@@ -363,6 +366,30 @@ TEST(ClientTest, OversizePrefixIsConnectionError) {
     EXPECT_NE(std::string(error.what()).find("4294967295"), std::string::npos) << error.what();
   }
   EXPECT_FALSE(client.connected());
+}
+
+// A peer that announces a message of 64 MiB (within the client's limit) and
+// sends a few bytes of it must not make the client allocate 64 MiB.
+TEST(ClientTest, ALyingLengthPrefixAllocatesOnlyWhatArrives) {
+  Gate sent, client_done;
+  FakeServer server([&](Peer& peer) {
+    Handshake(peer);
+    const uint32_t announced = 64u << 20;
+    std::string bytes(4, '\0');
+    for (int i = 0; i < 4; ++i) bytes[i] = static_cast<char>(announced >> (8 * i));
+    peer.SendBytes(bytes + std::string(100, '\x0a'));
+    sent.Open();
+    client_done.Wait();
+  });
+  Client client;
+  client.Connect("127.0.0.1", server.port());
+  client.set_max_message_bytes(64u << 20);
+  sent.Wait();
+  Envelope envelope;
+  const std::size_t before = t_allocated_bytes;
+  EXPECT_FALSE(client.ReceiveEnvelope(envelope, milliseconds(200)));
+  EXPECT_LE(t_allocated_bytes - before, std::size_t{2} << 20) << "bytes allocated for 104 bytes received";
+  client_done.Open();
 }
 
 TEST(ClientTest, StateArrivingWhileWaitingForAFrameIsKeptForGetState) {

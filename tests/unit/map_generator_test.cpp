@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "server/common/limits.h"
 #include "server/sim/map/generator.h"
 #include "server/sim/map/map_text.h"
 #include "server/sim/map/prng.h"
@@ -70,6 +72,27 @@ TEST(GeneratorTest, SameSeedGivesTheSameText) {
     EXPECT_NE(text, GenerateMapText(Options(8, 12, 11, s)));
   }
   EXPECT_NE(GenerateRoads(1, 10, 10, 20).road, GenerateRoads(2, 10, 10, 20).road);
+}
+
+// GenerateMap accepts grids up to 24x24; a dense one once had more road
+// tiles than a map may hold (seeds 260 and 269 among the first 150 did).
+TEST(GeneratorTest, TheLargestRequestedGridsGiveMapsTheParserAccepts) {
+  for (uint64_t seed = 1; seed <= 2000; ++seed) {
+    const Map roads = GenerateRoads(seed, 24, 24, 20);
+    const auto road_tiles = std::count_if(roads.road.begin(), roads.road.end(), [](auto mask) { return mask != 0; });
+    EXPECT_LE(road_tiles, limits::kMaxMapRoadTiles) << "seed " << seed;
+    EXPECT_NO_THROW(ParseMap(WriteMap(roads))) << "seed " << seed;
+  }
+  EXPECT_NO_THROW(ParseMap(GenerateMapText(Options(260, 24, 24, Surroundings::kUrban))));
+  // A grid no network within the limit fits says so (sim4cv_mapgen takes up to 200x200).
+  try {
+    GenerateRoads(1, 40, 40, 20);
+    ADD_FAILURE() << "a 40x40 road network within the road-tile limit";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_STREQ(error.what(),
+                 "no road network of 40x40 tiles within 256 road tiles (a map's limit) was found for seed 1 in 64 "
+                 "tries; use a smaller grid");
+  }
 }
 
 TEST(GeneratorTest, DesertAndUrbanShareTheRoads) {

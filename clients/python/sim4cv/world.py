@@ -175,10 +175,14 @@ class WorldRequests:
         list_maps gives)."""
         return self.configure(pb.Configure(open_map=pb.OpenMap(name=name))).map_text
 
-    def start_log(self, name, label="", overwrite=False):
+    def start_log(self, name, label="", overwrite=False, detach=False):
         """Starts a run log of every frame from the next one on, NAME.s4log
-        under the daemon's --logs-dir (docs/logs.md); returns its path."""
-        return self.configure(pb.Configure(start_log=pb.StartLog(name=name, label=label, overwrite=overwrite))).log_file
+        under the daemon's --logs-dir (docs/logs.md); returns its path. The
+        log ends when this client disconnects, unless `detach`; a cap
+        (--log-max-bytes, --log-max-seconds) or a failed write ends it too,
+        and the next call that reads raises ServerError saying why."""
+        start = pb.StartLog(name=name, label=label, overwrite=overwrite, detach=detach)
+        return self.configure(pb.Configure(start_log=start)).log_file
 
     def stop_log(self):
         """Stops the run log start_log began; returns its path."""

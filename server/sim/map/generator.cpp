@@ -13,6 +13,9 @@
 #include <charconv>
 #include <cstdio>
 #include <numeric>
+#include <set>
+#include <stdexcept>
+#include <utility>
 #include <sstream>
 
 #include "server/common/check.h"
@@ -25,6 +28,7 @@ namespace {
 
 constexpr double kExtraStreetChance = 0.12;  // per unused street, after the tree: extra loops
 constexpr double kThinChance = 0.6;          // per street between two junctions: turns both into bends
+constexpr int kMaxLatticeAttempts = 64;      // lattices drawn for one seed before a grid counts as too large
 
 // Grid lines along one axis of n tiles: 2 to 4 apart, at least 3 of them
 // when n >= 5 (so a 6x6 grid or larger can hold a junction).
@@ -101,6 +105,40 @@ int FindRoot(std::vector<int>& parent, int i) {
   return i;
 }
 
+// The tiles from node a's tile up to (not including) node b's tile.
+std::vector<TileCoord> StreetTiles(const Lattice& lattice, int a, int b) {
+  const TileCoord from = lattice.Tile(a), to = lattice.Tile(b);
+  const int dc = (to.col > from.col) - (to.col < from.col), dr = (to.row > from.row) - (to.row < from.row);
+  std::vector<TileCoord> tiles;
+  for (TileCoord t = from; !(t == to); t = {t.col + dc, t.row + dr}) tiles.push_back(t);
+  return tiles;
+}
+
+// Drops streets, in random order, whose both ends stay at degree >= 2 (no
+// dead end), when `drop()` says so and the network stays in one piece and
+// keeps a junction.
+template <typename Drop>
+void Thin(Lattice& lattice, Prng& rng, Drop drop) {
+  for (std::size_t i : lattice.Shuffled(rng, [](const Lattice::Street& s) { return s.used; })) {
+    Lattice::Street& s = lattice.streets[i];
+    const auto degree = lattice.Degrees();
+    if (degree[s.a] < 3 || degree[s.b] < 3 || !drop()) continue;
+    s.used = false;
+    if (!lattice.MarkTree() || !lattice.HasJunction()) s.used = true;
+  }
+}
+
+// The tiles the used streets cover: the map's road tiles.
+int RoadTileCount(const Lattice& lattice) {
+  std::set<std::pair<int, int>> tiles;
+  for (const auto& s : lattice.streets) {
+    if (!s.used) continue;
+    for (const TileCoord& t : StreetTiles(lattice, s.a, s.b)) tiles.insert({t.col, t.row});
+    tiles.insert({lattice.Tile(s.b).col, lattice.Tile(s.b).row});
+  }
+  return static_cast<int>(tiles.size());
+}
+
 Lattice BuildLattice(Prng& rng, int width, int height) {
   Lattice lattice{PickLines(rng, width), PickLines(rng, height), {}};
   const int nx = static_cast<int>(lattice.xs.size());
@@ -126,31 +164,21 @@ Lattice BuildLattice(Prng& rng, int width, int height) {
   for (auto& s : lattice.streets) {
     if (!s.used && rng.Chance(kExtraStreetChance)) s.used = true;
   }
-  // Fewer junctions, more bends: drop streets whose both ends stay at
-  // degree >= 2 (no dead end), if the network stays in one piece and keeps a junction.
-  for (std::size_t i : lattice.Shuffled(rng, [](const Lattice::Street& s) { return s.used; })) {
-    Lattice::Street& s = lattice.streets[i];
-    const auto degree = lattice.Degrees();
-    if (degree[s.a] < 3 || degree[s.b] < 3 || !rng.Chance(kThinChance)) continue;
-    s.used = false;
-    if (!lattice.MarkTree() || !lattice.HasJunction()) s.used = true;
-  }
+  // Fewer junctions, more bends.
+  Thin(lattice, rng, [&] { return rng.Chance(kThinChance); });
   // A single ring has no junction; one more street gives it two T's.
   if (!lattice.HasJunction()) {
     const auto unused = lattice.Shuffled(rng, [](const Lattice::Street& s) { return !s.used; });
     if (!unused.empty()) lattice.streets[unused[0]].used = true;
   }
+  // A dense large grid can exceed what a map may hold: thin it further, as
+  // far as the rules allow (a network that fits is left as it was, so the
+  // maps made before this rule come out the same).
+  if (RoadTileCount(lattice) > limits::kMaxMapRoadTiles) {
+    Thin(lattice, rng, [&] { return RoadTileCount(lattice) > limits::kMaxMapRoadTiles; });
+  }
   SIM4CV_DEMAND(lattice.MarkTree());
   return lattice;
-}
-
-// The tiles from node a's tile up to (not including) node b's tile.
-std::vector<TileCoord> StreetTiles(const Lattice& lattice, int a, int b) {
-  const TileCoord from = lattice.Tile(a), to = lattice.Tile(b);
-  const int dc = (to.col > from.col) - (to.col < from.col), dr = (to.row > from.row) - (to.row < from.row);
-  std::vector<TileCoord> tiles;
-  for (TileCoord t = from; !(t == to); t = {t.col + dc, t.row + dr}) tiles.push_back(t);
-  return tiles;
 }
 
 // The longest cycle made of one non-tree street and the tree path between
@@ -284,7 +312,18 @@ std::string GeneratorArgs(const GeneratorOptions& options) {
 Map GenerateRoads(uint64_t seed, int width, int height, double tile_size) {
   SIM4CV_THROW_UNLESS(width >= 3 && height >= 3, "a generated map needs at least 3x3 tiles");
   Prng rng(seed);
-  const Lattice lattice = BuildLattice(rng, width, height);
+  Lattice lattice = BuildLattice(rng, width, height);
+  // Where thinning could not bring a network within the limit, the next
+  // lattice the seed's generator draws is tried (other lines, other streets).
+  for (int attempt = 1; RoadTileCount(lattice) > limits::kMaxMapRoadTiles; ++attempt) {
+    if (attempt == kMaxLatticeAttempts) {
+      throw std::invalid_argument("no road network of " + std::to_string(width) + "x" + std::to_string(height) +
+                                  " tiles within " + std::to_string(limits::kMaxMapRoadTiles) +
+                                  " road tiles (a map's limit) was found for seed " + std::to_string(seed) +
+                                  " in " + std::to_string(kMaxLatticeAttempts) + " tries; use a smaller grid");
+    }
+    lattice = BuildLattice(rng, width, height);
+  }
   Map map;
   map.name = "generated";
   map.tile_size = tile_size;

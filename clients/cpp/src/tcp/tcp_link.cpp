@@ -19,6 +19,7 @@ namespace {
 using Envelope = proto::Envelope;
 
 // First byte of an Envelope that carries a Frame (field number, wire type 2).
+constexpr std::size_t kFirstPieceBytes = std::size_t{1} << 20;  // buffer for a message's first bytes
 constexpr uint8_t kFrameFieldTag = (Envelope::kFrameFieldNumber << 3) | 2;
 
 class TcpLink : public Link {
@@ -79,13 +80,19 @@ class TcpLink : public Link {
           Fail("sim4cvd announced a message of " + std::to_string(body_size_) + " bytes, more than the limit of " +
                std::to_string(max_message_bytes_));
         }
-        // Grow only: resizing down and up again would zero-fill each time.
-        if (buffer_.size() < body_size_) buffer_.resize(body_size_);
         body_filled_ = 0;
       }
-      if (ReadUntil(fd_, reinterpret_cast<uint8_t*>(buffer_.data()), body_size_, body_filled_, deadline, address_) ==
-          ReadStatus::kTimeout) {
-        return false;
+      // The buffer grows with what arrives, doubling (never shrinks: resizing
+      // down and up again would zero-fill each time), so a peer that
+      // announces 64 MiB and sends a few bytes costs 1 MiB, not 64.
+      while (body_filled_ < body_size_) {
+        const std::size_t piece_end =
+            std::min(body_size_, std::max({buffer_.size(), kFirstPieceBytes, 2 * body_filled_}));
+        if (buffer_.size() < piece_end) buffer_.resize(piece_end);
+        if (ReadUntil(fd_, reinterpret_cast<uint8_t*>(buffer_.data()), piece_end, body_filled_, deadline, address_) ==
+            ReadStatus::kTimeout) {
+          return false;
+        }
       }
     } catch (const ConnectionError&) {
       Close();
