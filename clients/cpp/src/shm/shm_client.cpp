@@ -153,6 +153,23 @@ bool CopyPlane(std::vector<uint8_t>& out, const uint8_t* slot, uint64_t slot_byt
   return true;
 }
 
+// The abstract socket name is anyone's to take: attach only to a process of
+// our own user (SO_PEERCRED of the listening end), as the daemon accepts
+// only clients of its own user.
+void CheckPeerIsUs(int socket, const std::string& name) {
+  ucred peer{};
+  socklen_t length = sizeof peer;
+  if (getsockopt(socket, SOL_SOCKET, SO_PEERCRED, &peer, &length) != 0) {
+    throw ShmError("cannot tell who serves " + name + " (SO_PEERCRED: " + std::strerror(errno) + ")");
+  }
+  if (peer.uid != getuid()) {
+    throw ShmError("refusing to attach to " + name + ": the socket @" + shm::SocketPath(name).substr(1) +
+                   " belongs to process " + std::to_string(peer.pid) + " of uid " + std::to_string(peer.uid) +
+                   ", not to this user (uid " + std::to_string(getuid()) +
+                   "); another user may be impersonating sim4cvd");
+  }
+}
+
 }  // namespace
 
 bool FrameView::has(proto::Channel channel) const { return slot_ && InMask(header_.channel_mask, channel); }
@@ -231,6 +248,7 @@ void ShmClient::Attach() {
     throw ShmError("no sim4cvd serves shared memory under " + name_ + " (" + std::strerror(error) +
                    "); is it running with --shm-name " + name_.substr(1) + "?");
   }
+  CheckPeerIsUs(socket_, name_);
   const timeval limit{5, 0};  // a daemon answers at once; a stuck one must not hang Open
   setsockopt(socket_, SOL_SOCKET, SO_RCVTIMEO, &limit, sizeof limit);
   shm::ShmAttach attach{};
