@@ -100,11 +100,13 @@ TEST_F(UdpDaemonTest, VersionMismatchIsRefusedOverUdp) {
 }
 
 TEST_F(UdpDaemonTest, SilentLockstepClientExpiresAndStopsBlockingOthers) {
-  StartDaemon({"--udp-expiry-ms", "300"});
-  auto udp = ConnectUdp("goes-silent");
+  // The expiry leaves room for a busy machine to pause this test between
+  // two of the UDP client's datagrams (300 ms once lapsed before its Subscribe).
+  StartDaemon({"--udp-expiry-ms", "2000"});
   auto tcp = Connect("keeps-stepping");
-  udp->Subscribe("uav", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
   tcp->Subscribe("uav", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
+  auto udp = ConnectUdp("goes-silent");
+  udp->Subscribe("uav", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
   proto::Frame frame;
   // Expiry counts from the UDP client's last datagram, its Step: timing from
   // before it sends gives a lower bound that a loaded machine cannot break.
@@ -116,7 +118,7 @@ TEST_F(UdpDaemonTest, SilentLockstepClientExpiresAndStopsBlockingOthers) {
   // The UDP client says nothing more; the simulation waits for it until its registration lapses.
   tcp->Step();
   ASSERT_TRUE(tcp->ReceiveFrame(frame, 5000ms)) << "the expired UDP client still blocks lockstep";
-  EXPECT_GE(std::chrono::steady_clock::now() - start, 250ms);
+  EXPECT_GE(std::chrono::steady_clock::now() - start, 1900ms);
   EXPECT_EQ(frame.frame_id(), 2u);
   for (int i = 0; i < 5; ++i) EXPECT_EQ(tcp->StepAndReceive(1000ms).frame_id(), 3u + i);
   EXPECT_EQ(Counter(TcpStats(), "udp.expired"), 1u);
@@ -130,21 +132,21 @@ TEST_F(UdpDaemonTest, SilentLockstepClientExpiresAndStopsBlockingOthers) {
 }
 
 TEST_F(UdpDaemonTest, KeepAlivesHoldANewestFrameRegistration) {
-  StartDaemon({"--mode", "realtime", "--udp-expiry-ms", "300"});
+  // A client that only receives sends nothing but its keep-alives: it must
+  // still be registered, and get frames, well past the expiry. The margins
+  // hold on a busy machine (no frame count, which depends on its speed).
+  StartDaemon({"--mode", "realtime", "--udp-expiry-ms", "1000"});
   auto udp = ConnectUdp("viewer");
   udp->set_keepalive_interval(100ms);
   udp->Subscribe("uav", {proto::CHANNEL_RGB}, proto::DELIVERY_NEWEST);
   proto::Frame frame;
   uint64_t last_id = 0;
-  int frames = 0;
   const auto start = std::chrono::steady_clock::now();
-  while (std::chrono::steady_clock::now() - start < 1500ms) {
-    ASSERT_TRUE(udp->ReceiveFrame(frame, 2000ms)) << "frames stopped after " << frames;
+  while (std::chrono::steady_clock::now() - start < 2500ms) {
+    ASSERT_TRUE(udp->ReceiveFrame(frame, 5000ms)) << "frames stopped after frame " << last_id;
     EXPECT_GT(frame.frame_id(), last_id);
     last_id = frame.frame_id();
-    ++frames;
   }
-  EXPECT_GE(frames, 30);  // 1.5 s at 30 Hz, minus start-up
   EXPECT_EQ(Counter(udp->GetStats(), "udp.expired"), 0u);
 }
 

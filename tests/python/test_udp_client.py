@@ -38,12 +38,14 @@ def test_lockstep_over_udp(start_daemon):
 
 
 def test_keep_alives_hold_the_registration_while_waiting(start_daemon):
-    daemon = start_daemon("--udp-port", "0", "--udp-expiry-ms", "600")
+    # Keep-alives every 0.2 s against a 2 s expiry: a busy machine may pause
+    # this process for a while without the registration lapsing.
+    daemon = start_daemon("--udp-port", "0", "--udp-expiry-ms", "2000")
     with _udp(daemon, keepalive_interval=0.2) as client:
         client.subscribe("uav", ["rgb"], "lockstep")
         assert client.step_and_receive().frame_id == 1
         with pytest.raises(TimeoutError):
-            client.receive_frame(timeout=1.5)  # no Step: nothing comes, but keep-alives go out
+            client.receive_frame(timeout=3.0)  # no Step: nothing comes, but keep-alives go out
         assert "udp.expired" not in client.get_stats().counters
         assert client.step_and_receive().frame_id == 2  # same registration, same subscription
 
