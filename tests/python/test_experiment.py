@@ -8,7 +8,6 @@ import json
 import os
 import subprocess
 import sys
-import time
 
 import pytest
 
@@ -96,11 +95,9 @@ def test_smoke_online_and_resume(tmp_path):
     assert (out / "plots" / "trajectories_tracking_easy_urban_s8.png").stat().st_size > 1000
     assert "trajectories_tracking_easy_urban_s8.png" in report
     # resume: every run is skipped
-    t0 = time.monotonic()
     again = run_cli("experiments/smoke.yaml", "--out", str(out), "--jobs", "1")
     assert again.returncode == 0, again.stderr
     assert again.stderr.count("skipped (done before)") == 2
-    assert time.monotonic() - t0 < 15
     assert len(json.loads((out / "results.json").read_text())) == 2
     # an interrupted run (no session.json) is redone; the other one is kept
     runs = sorted(glob.glob(str(out / "runs" / "*")))

@@ -283,7 +283,7 @@ def test_other_output_is_ignored():
 def test_hang_is_killed_after_timeout():
     start = time.monotonic()
     _fails(["--hang-after", "1"], r"did not send a state after frame within 0.5 s; killed it", timeout=0.5)
-    assert time.monotonic() - start < 5
+    assert time.monotonic() - start < 20  # killed at its timeout, not a default one (margin for busy hosts)
 
 
 def test_hang_without_reading_a_large_frame():
@@ -292,7 +292,7 @@ def test_hang_without_reading_a_large_frame():
     start = time.monotonic()
     with pytest.raises(TraxError, match=r"did not read its input within 0.5 s; killed it"):
         t.update(np.zeros((480, 640, 3), np.uint8))    # 1.2 MB of Base64: more than a pipe holds
-    assert time.monotonic() - start < 3
+    assert time.monotonic() - start < 20  # margin for busy hosts; the message names the 0.5 s limit
     assert_gone(t.pid)
 
 

