@@ -1,6 +1,6 @@
-"""A tracker kind added as one file plus one registration line
-(tests/python/extending/colour_tracker_kind.py) is checked by experiment
-files and runs through the offline evaluation's code path."""
+"""A tracker kind added as one file (the colour kind in extending/) plus one
+registration line is checked by experiment files and runs through the
+offline evaluation's code path."""
 
 import os
 import sys
