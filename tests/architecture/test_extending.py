@@ -3,8 +3,12 @@ thing as one file plus one registration line. Here: the example's name
 occurs in its file and on exactly one line of the registering file, nowhere
 else in the code it extends, and the section quotes that line as it is.
 (That each example works is shown by its own test, named in the section.)"""
+import json
 import pathlib
 import re
+import shutil
+import subprocess
+import sys
 
 import pytest
 
@@ -61,3 +65,43 @@ def test_the_example_is_one_file_plus_one_registration_line(what, name, example,
 def test_the_architecture_document_gives_the_recipe(what, name, example, registry, line):
     section = extending_section()
     assert example in section and line in section, "%s: docs/architecture.md, Extending sim4cv" % what
+
+
+# --- a pixel channel -------------------------------------------------------------------------------
+# Its registration line is its row in protocol/channels.h; C++ (the daemon, the C++ client, the MEX)
+# reads the table there, and tools/channel_tables.py copies it for Python and the studio.
+DEMO_CHANNEL = 'X(ALBEDO, "albedo", RGB8, U8, 3, "surface colour before any light")'
+
+
+def test_the_clients_copies_of_the_channel_table_are_current():
+    sys.path.insert(0, str(ROOT / "tools"))
+    import channel_tables
+    assert channel_tables.main(["--check"]) == 0, "run /usr/bin/python3 tools/channel_tables.py"
+
+
+def test_a_channel_row_reaches_python_and_the_studio(tmp_path):
+    """The worked example's row, added to a copy of channels.h, is in the copies the generator writes,
+    and the studio lists it and draws it (grey, having no colour map of its own) with no other edit."""
+    header = (ROOT / "protocol" / "channels.h").read_text()
+    last_row = re.findall(r'^  X\(FLOW, .*$', header, re.M)[0]
+    (tmp_path / "protocol").mkdir()
+    (tmp_path / "protocol" / "channels.h").write_text(
+        header.replace(last_row, last_row.rstrip(" \\") + " \\\n  " + DEMO_CHANNEL))
+    (tmp_path / "clients" / "python" / "sim4cv").mkdir(parents=True)
+    shutil.copytree(ROOT / "studio" / "js", tmp_path / "studio" / "js")
+    assert subprocess.run([sys.executable, str(ROOT / "tools" / "channel_tables.py"), "--root", str(tmp_path)]).returncode == 0
+
+    table = {}
+    exec((tmp_path / "clients" / "python" / "sim4cv" / "channel_table.py").read_text(), table)
+    assert table["PIXEL_CHANNELS"][-1] == ("albedo", "CHANNEL_ALBEDO", "PIXEL_FORMAT_RGB8", "u8", 3, 3,
+                                           "surface colour before any light")
+    script = """
+      import("%s").then((colours) => {
+        const out = new Uint8ClampedArray(4 * 2);
+        colours.toRgba("CHANNEL_ALBEDO", new Uint8Array([10, 0, 0, 30, 0, 0]), out);
+        console.log(JSON.stringify({ channels: colours.CHANNELS, pixels: Array.from(out) }));
+      });""" % (tmp_path / "studio" / "js" / "colours.js")
+    shown = json.loads(subprocess.run(["node", "--input-type=module", "-e", script], capture_output=True, text=True,
+                                      check=True).stdout)
+    assert shown["channels"][-1] == {"name": "albedo", "label": "albedo", "channel": "CHANNEL_ALBEDO"}
+    assert shown["pixels"] == [0, 0, 0, 255, 255, 255, 255, 255]
