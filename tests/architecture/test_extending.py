@@ -23,11 +23,14 @@ EXAMPLES = [
     ("transport", "MakeSeqpacketTransport", "tests/extending/seqpacket_transport.cpp",
      "tests/extending/extending_transport_test.cpp",
      'daemon::RegisterTransport({"seqpacket", demo::MakeSeqpacketTransport});'),
+    ("entity kind", "kBeacon", "tests/extending/beacon_kind.cpp", "tests/extending/extending_entity_kind_test.cpp",
+     "sim::RegisterEntityKind(demo::kBeacon);"),
     ("Configure request", "kGetWorld", "server/daemon/configure/get_world.cpp",
      "server/daemon/configure_requests.cpp", "X(kGetWorld)"),
 ]
 # C++ names a function of another file by declaring it: that line is no registration.
-DECLARATIONS = {"std::unique_ptr<transport::Transport> MakeSeqpacketTransport(const daemon::Config&, const sim::Scene&);"}
+DECLARATIONS = {"std::unique_ptr<transport::Transport> MakeSeqpacketTransport(const daemon::Config&, const sim::Scene&);",
+                "extern const sim::EntityKindEntry kBeacon;"}
 
 
 def files_naming(word):

@@ -3,22 +3,18 @@
 // serves it beside TCP, and a client on it says Hello, subscribes and steps
 // a lockstep world through the session code every transport shares.
 #include <gtest/gtest.h>
-#include <pthread.h>
-#include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
 
-#include <chrono>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <future>
-#include <thread>
 
 #include "protocol/framing.h"
-#include "server/daemon/daemon.h"
 #include "server/daemon/transports.h"
+#include "tests/extending/in_process_daemon.h"
 
 namespace sim4cv::demo {
 std::unique_ptr<transport::Transport> MakeSeqpacketTransport(const daemon::Config&, const sim::Scene&);
@@ -26,8 +22,6 @@ std::unique_ptr<transport::Transport> MakeSeqpacketTransport(const daemon::Confi
 
 namespace sim4cv {
 namespace {
-
-constexpr const char* kToken = "0123456789abcdef0123456789abcdef";
 
 // One Envelope per message, as the transport sends them; fails the test after `seconds`.
 proto::Envelope Receive(int fd, int seconds = 60) {
@@ -37,7 +31,9 @@ proto::Envelope Receive(int fd, int seconds = 60) {
   const ssize_t size = ::recv(fd, buffer.data(), buffer.size(), 0);
   proto::Envelope envelope;
   EXPECT_GT(size, 0) << "no message within " << seconds << " s";
-  if (size > 0) EXPECT_TRUE(envelope.ParseFromArray(buffer.data(), static_cast<int>(size)));
+  if (size > 0) {
+    EXPECT_TRUE(envelope.ParseFromArray(buffer.data(), static_cast<int>(size)));
+  }
   return envelope;
 }
 
@@ -49,42 +45,23 @@ void Send(int fd, const proto::Envelope& envelope) {
 TEST(ExtendingTransport, ARegisteredTransportServesAClientThroughTheRealDaemon) {
   daemon::RegisterTransport({"seqpacket", demo::MakeSeqpacketTransport});  // the one registration line
 
-  const auto folder = std::filesystem::temp_directory_path() / ("sim4cv-seqpacket-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(folder);
-  const std::string socket_path = (folder / "daemon.sock").string();
-  std::ofstream(folder / "token") << kToken << "\n";
+  const std::string socket_path =
+      (std::filesystem::temp_directory_path() / ("sim4cv-seqpacket-" + std::to_string(::getpid()))).string();
   ::setenv("SIM4CV_SEQPACKET_PATH", socket_path.c_str(), 1);
-  std::string help;
-  const auto config = daemon::ParseFlags({"--tcp-port", "0", "--udp-port", "-1", "--mode", "lockstep", "--width",
-                                          "64", "--height", "48", "--token-file", (folder / "token").string()},
-                                         help);
-  ASSERT_TRUE(config.has_value());
-
-  // The daemon waits for SIGTERM in its own thread, which blocks it; so does this one.
-  sigset_t stop;
-  sigemptyset(&stop);
-  sigaddset(&stop, SIGINT);
-  sigaddset(&stop, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop, nullptr);
-  std::packaged_task<int()> run([&] { return daemon::RunDaemon(*config); });
-  std::future<int> exit_status = run.get_future();
-  std::thread daemon_thread(std::move(run));
+  testing::InProcessDaemon daemon(
+      {"--tcp-port", "0", "--udp-port", "-1", "--mode", "lockstep", "--width", "64", "--height", "48"});
+  EXPECT_NE(daemon.listening_line().find(" seqpacket=" + socket_path), std::string::npos) << daemon.listening_line();
 
   const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
   sockaddr_un address{};
   address.sun_family = AF_UNIX;
   std::strncpy(address.sun_path, socket_path.c_str(), sizeof address.sun_path - 1);
-  bool connected = false;
-  for (int tries = 0; tries < 600 && !connected; ++tries) {  // the daemon builds its world first
-    connected = ::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
-    if (!connected) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  ASSERT_TRUE(connected) << socket_path;
+  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0) << std::strerror(errno);
 
   proto::Envelope hello;
   hello.mutable_hello()->set_protocol_version(wire::kProtocolVersion);
   hello.mutable_hello()->set_client_name("seqpacket");
-  hello.mutable_hello()->set_token(kToken);
+  hello.mutable_hello()->set_token(testing::InProcessDaemon::kToken);
   Send(fd, hello);
   const proto::Envelope welcome = Receive(fd);
   ASSERT_TRUE(welcome.has_welcome()) << welcome.ShortDebugString();
@@ -123,11 +100,8 @@ TEST(ExtendingTransport, ARegisteredTransportServesAClientThroughTheRealDaemon) 
   EXPECT_NE(error.error().message().find("nowhere"), std::string::npos) << error.error().message();
 
   ::close(fd);
-  pthread_kill(daemon_thread.native_handle(), SIGTERM);
-  daemon_thread.join();
-  EXPECT_EQ(exit_status.get(), 0);
+  EXPECT_EQ(daemon.Stop(), 0);
   EXPECT_FALSE(std::filesystem::exists(socket_path));  // the transport removed its socket when it stopped
-  std::filesystem::remove_all(folder);
 }
 
 }  // namespace

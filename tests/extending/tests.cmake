@@ -7,3 +7,4 @@ function(sim4cv_extending_test name example)
 endfunction()
 
 sim4cv_extending_test(extending_transport_test seqpacket_transport.cpp sim4cv_daemon)
+sim4cv_extending_test(extending_entity_kind_test beacon_kind.cpp sim4cv_daemon)
