@@ -20,6 +20,7 @@ PACKAGES=(
   slurmctld slurmd slurm-client munge python3-distributed  # tests/python/test_scaling.py: a one-machine Slurm cluster and Dask (docs/scaling.md)
   opencv-data  # the realism probe (bench/realism_probe.py): OpenCV's Haar full- and upper-body cascades
   sweethome3d-furniture  # the packaged people walkers are drawn with (assets/build_assets.py, docs/assets.md)
+  nodejs  # tests/architecture/test_extending.py: the studio's channel list and colours run on a worked-example channel
 )
 
 missing=()

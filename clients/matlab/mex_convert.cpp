@@ -7,6 +7,8 @@
 #include <cstring>
 #include <vector>
 
+#include "protocol/channels.h"
+
 namespace sim4cv::mexbind {
 namespace {
 
@@ -36,23 +38,10 @@ std::string LowerSuffix(const std::string& enum_name, const std::string& prefix)
   return out;
 }
 
+// The channel's name in the table (protocol/channels.h), a string literal there.
 const char* ChannelField(proto::Channel channel) {
-  switch (channel) {
-    case proto::CHANNEL_RGB:
-      return "rgb";
-    case proto::CHANNEL_DEPTH:
-      return "depth";
-    case proto::CHANNEL_MASK:
-      return "mask";
-    case proto::CHANNEL_SEMANTIC:
-      return "semantic";
-    case proto::CHANNEL_NORMALS:
-      return "normals";
-    case proto::CHANNEL_FLOW:
-      return "flow";
-    default:
-      return nullptr;
-  }
+  const channels::ChannelInfo* info = channels::Find(channel);
+  return info ? info->name.data() : nullptr;
 }
 
 // One pass over the pixels: C-order rows of `stride` bytes, pixel (c, r)

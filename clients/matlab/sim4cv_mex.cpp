@@ -21,6 +21,7 @@
 
 #include "mex.h"
 #include "mex_convert.h"
+#include "protocol/channels.h"
 #include "sim4cv/client.h"
 #include "sim4cv/shm_client.h"
 
@@ -28,6 +29,7 @@ namespace {
 
 using sim4cv::Client;
 namespace proto = sim4cv::proto;
+namespace channels = sim4cv::channels;
 using Ms = Client::Duration;
 
 struct BadHandle : std::runtime_error {
@@ -145,16 +147,12 @@ class Call {
   mxArray** plhs_;
 };
 
+// A pixel channel of the table (protocol/channels.h) or boxes.
 proto::Channel ChannelOf(const Call& call, const std::string& name) {
-  static const std::map<std::string, proto::Channel> kChannels = {
-      {"rgb", proto::CHANNEL_RGB},     {"depth", proto::CHANNEL_DEPTH},       {"mask", proto::CHANNEL_MASK},
-      {"boxes", proto::CHANNEL_BOXES}, {"semantic", proto::CHANNEL_SEMANTIC}, {"normals", proto::CHANNEL_NORMALS},
-      {"flow", proto::CHANNEL_FLOW}};
-  const auto found = kChannels.find(name);
-  if (found == kChannels.end()) {
-    call.Fail("unknown channel '" + name + "' (rgb, depth, mask, boxes, semantic, normals, flow)");
-  }
-  return found->second;
+  if (name == "boxes") return proto::CHANNEL_BOXES;
+  const channels::ChannelInfo* info = channels::FindByName(name);
+  if (info == nullptr) call.Fail("unknown channel '" + name + "' (" + channels::Names(channels::kAllPixels) + ",boxes)");
+  return info->id;
 }
 
 proto::Delivery DeliveryOf(const Call& call, const std::string& name) {

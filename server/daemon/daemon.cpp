@@ -12,10 +12,7 @@
 #include "server/daemon/access_token_files.h"
 #include "server/daemon/sim_thread.h"
 #include "server/daemon/state_message.h"
-#include "server/transport/http/http_transport.h"
-#include "server/transport/shm/shm_transport.h"
-#include "server/transport/tcp/tcp_transport.h"
-#include "server/transport/udp/udp_transport.h"
+#include "server/daemon/transports.h"
 
 namespace sim4cv::daemon {
 namespace {
@@ -87,42 +84,7 @@ int RunDaemon(const Config& config) {
   const auto initial_scene = std::make_shared<const sim::Scene>(std::move(loaded));
   const sim::Scene& scene = *initial_scene;
 
-  std::vector<std::unique_ptr<transport::Transport>> transports;
-  transports.push_back(
-      transport::MakeTcpTransport({config.bind_address,
-                                   config.tcp_port,
-                                   config.max_clients,
-                                   config.max_message_bytes,
-                                   config.tcp_send_buffer_bytes,
-                                   {config.handshake_timeout_ms, config.message_timeout_ms, config.idle_timeout_ms}}));
-  if (config.udp_port >= 0) {
-    transports.push_back(
-        transport::MakeUdpTransport({config.bind_address, static_cast<uint16_t>(config.udp_port),
-                                     config.udp_datagram_bytes, config.udp_expiry_ms, config.max_clients}));
-  }
-  if (!config.shm_name.empty()) {
-    const int shm_camera = scene.FindCamera(config.shm_camera);
-    SIM4CV_THROW_UNLESS(shm_camera >= 0,
-                        "--shm-camera '" << config.shm_camera << "' is not a camera of scene '" << scene.name << "'");
-    const auto& camera = scene.cameras[static_cast<std::size_t>(shm_camera)];
-    transport::ShmOptions shm{config.shm_name, config.shm_camera, config.shm_slots};
-    shm.width = camera.width;
-    shm.height = camera.height;
-    shm.expiry_ms = config.shm_expiry_ms;
-    shm.channel_mask = config.shm_channel_mask;
-    transports.push_back(transport::MakeShmTransport(shm));
-  }
-  if (config.http_port >= 0) {
-    transport::HttpOptions http;
-    http.bind_address = config.http_bind;
-    http.port = static_cast<uint16_t>(config.http_port);
-    http.max_clients = config.http_max_clients;
-    http.other_connections = config.max_clients;  // TCP's, for the descriptor check
-    http.studio_dir = config.studio_dir;
-    http.timeouts = {config.handshake_timeout_ms, config.message_timeout_ms, config.idle_timeout_ms};
-    http.send_buffer_bytes = config.tcp_send_buffer_bytes;
-    transports.push_back(transport::MakeHttpTransport(http));
-  }
+  std::vector<std::unique_ptr<transport::Transport>> transports = MakeTransports(config, scene);
 
   session::CommandQueue commands;
   session::LatestState latest_state;
@@ -135,10 +97,10 @@ int RunDaemon(const Config& config) {
     token_files = std::make_unique<AccessTokenFiles>(token, TokenFileNames(transports));
     LOG_INFO("clients must show the access token in " << token_files->paths().front()
                                                       << " (readable only by this user; docs/security.md)");
-    if (config.http_port >= 0) {
-      LOG_INFO("studio: open http://" << config.http_bind << ":" << transports.back()->info().address()
-                                      << "/?token=$(cat " << TokenFolder() << "/http-"
-                                      << transports.back()->info().address() << ".token)");
+    for (const auto& t : transports) {
+      if (t->info().kind() != proto::TRANSPORT_KIND_WEBSOCKET) continue;
+      LOG_INFO("studio: open http://" << config.http_bind << ":" << t->info().address() << "/?token=$(cat "
+                                      << TokenFolder() << "/http-" << t->info().address() << ".token)");
     }
   } else {
     LOG_WARNING("--no-auth: every local user can drive this daemon and make it write files");

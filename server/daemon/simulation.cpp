@@ -7,6 +7,7 @@
 #include "server/common/check.h"
 #include "server/common/limits.h"
 #include "server/common/quoted.h"
+#include "server/daemon/configure_request.h"
 #include "server/daemon/named_files.h"
 #include "server/daemon/run_logger.h"
 #include "server/wire/effects_wire.h"
@@ -161,10 +162,6 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       QueryRoad(request.query_road(), *answer.mutable_road());
       change.world_changed = false;
       break;
-    case Kind::kGetWorld:
-      if (request.get_world().with_map_text() && scene_->map) answer.set_map_text(map::WriteMap(*scene_->map));
-      change.world_changed = false;
-      break;
     case Kind::kListMaps:
     case Kind::kCheckMap:
     case Kind::kGenerateMap:
@@ -183,6 +180,15 @@ Simulation::Change Simulation::Apply(const proto::Configure& request, proto::Con
       break;
     case Kind::REQUEST_NOT_SET:
       throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT, "Configure carries no request");
+    default:  // a request with a file of its own (configure_requests.cpp)
+      const ConfigureRequest* carried = FindConfigureRequest(request.request_case());
+      if (carried == nullptr) {
+        throw ConfigureError(proto::ERROR_CODE_INVALID_ARGUMENT,
+                             "Configure request " + std::to_string(request.request_case()) +
+                                 " is not carried out by this daemon");
+      }
+      carried->apply(*this, request, answer, change);
+      break;
   }
   try {
     FillWorldInfo(*answer.mutable_world());

@@ -11,6 +11,7 @@
 #include "server/render/mesh_builder.h"
 #include "server/render/object_meshes.h"
 #include "server/render/traffic_meshes.h"
+#include "server/sim/entity_kind_registry.h"
 #include "server/wire/entity_kinds_wire.h"
 #include "server/sim/vehicles/gimbal.h"
 #include "sim4cv.pb.h"
@@ -103,6 +104,10 @@ SceneGraphics::SceneGraphics(const sim::Scene& scene) : scene_(scene) {
   UavParts uav = MakeUavParts(uav_span_, {0.15f, 0.15f, 0.18f});
   uav_mesh_ = add_mesh(std::move(uav.body));
   rotor_mesh_ = add_mesh(std::move(uav.rotor));
+  for (const sim::EntityKindEntry& kind : sim::RegisteredKinds()) {
+    const Eigen::Vector3f colour(kind.colour[0], kind.colour[1], kind.colour[2]);
+    registered_meshes_.push_back({kind.info.kind, add_mesh(MakeBox(kind.half_extents.cast<float>(), colour))});
+  }
   // Entities take the ids below the static objects' (sim::kMaxEntityId).
   instance_id_bound_ = sim::kMaxEntityId + 1;
   for (const auto& object : static_labelled_)
@@ -134,6 +139,10 @@ void SceneGraphics::Update(const sim::State& state) {
       case sim::EntityKind::kPedestrian:
         half_extents = kPedestrianBox;
         box_centre.z() += kPedestrianBox.z();
+        break;
+      default:  // a registered kind (sim/entity_kind_registry.h): a box of its colour
+        for (const auto& [kind, box] : registered_meshes_) mesh = kind == entity.kind ? box : mesh;
+        half_extents = sim::FindRegisteredKind(entity.kind)->half_extents;
         break;
     }
     const Eigen::Matrix4f pose = BodyPose(entity.body);

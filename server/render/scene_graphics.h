@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "server/render/ground_truth.h"
@@ -63,6 +64,7 @@ class SceneGraphics {
   std::vector<DrawItem> previous_items_;  // items_ of the last Update
   std::size_t static_item_count_ = 0;
   MeshId car_mesh_ = 0, target_car_mesh_ = 0, uav_mesh_ = 0, rotor_mesh_ = 0;
+  std::vector<std::pair<sim::EntityKind, MeshId>> registered_meshes_;  // a box per registered entity kind
   std::unique_ptr<WalkerLooks> walker_looks_;
   float uav_span_ = 0.0f;
   std::vector<Eigen::Vector3f> lamps_;

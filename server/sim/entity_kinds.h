@@ -3,12 +3,14 @@
 // (server/wire/entity_kinds_wire.h asserts they agree), the World's names
 // for them, the run log's object classes and the Configure checks all read
 // this table; adding a kind is one line here plus its behaviour (its vehicle
-// in World, its mesh in SceneGraphics).
+// in World, its mesh in SceneGraphics), or, for a kinematic kind drawn as a
+// box, one file registered at run time (entity_kind_registry.h).
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <string_view>
+#include <type_traits>
 
 
 namespace sim4cv::sim {
@@ -38,12 +40,17 @@ inline constexpr std::array kEntityKinds = {
 #undef SIM4CV_ENTITY_KIND_INFO
 };
 
-// The kind whose protocol value is `value`, or nullptr.
+// A kind registered at run time (entity_kind_registry.h), or nullptr.
+const EntityKindInfo* FindRegisteredEntityKind(int value);
+
+// The kind whose protocol value is `value`, or nullptr: the table's, then
+// (at run time) the registered ones.
 constexpr const EntityKindInfo* FindEntityKind(int value) {
   for (const EntityKindInfo& info : kEntityKinds) {
     if (static_cast<int>(info.kind) == value) return &info;
   }
-  return nullptr;
+  if (std::is_constant_evaluated()) return nullptr;
+  return FindRegisteredEntityKind(value);
 }
 
 constexpr const EntityKindInfo& InfoOf(EntityKind kind) { return *FindEntityKind(static_cast<int>(kind)); }

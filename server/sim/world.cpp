@@ -9,6 +9,7 @@
 
 #include "server/common/check.h"
 #include "server/sim/controllers.h"
+#include "server/sim/entity_kind_registry.h"
 #include "server/sim/track_servo.h"
 #include "server/sim/log/replay_track.h"
 #include "server/sim/traffic_bodies.h"
@@ -170,9 +171,11 @@ uint32_t World::Spawn(State& state, EntityKind kind, const std::string& name, co
     ++id;
   }
   SIM4CV_THROW_UNLESS(id <= kMaxEntityId, "the world already holds " << kMaxEntityId << " entities, the most it can");
+  const EntityKindEntry* registered = FindRegisteredKind(kind);
   const std::string entity_name = name.empty() ? std::string(kind == EntityKind::kCar   ? "car_"
                                                             : kind == EntityKind::kUav ? "uav_"
-                                                                                      : "pedestrian_") +
+                                                            : registered ? std::string(registered->info.name) + "_"
+                                                                         : "pedestrian_") +
                                                     std::to_string(id)
                                               : name;
   SIM4CV_THROW_UNLESS(!state.FindByName(entity_name), "an entity named '" << entity_name << "' already exists");
@@ -192,6 +195,8 @@ uint32_t World::Spawn(State& state, EntityKind kind, const std::string& name, co
     // Kinematic: no Bullet body, it stands on the ground where it is put.
     entity.body.position = {pose.position.x(), pose.position.y(), 0.0};
     entity.body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ()));
+  } else if (registered) {
+    registered->behaviour->Spawn(pose.position, pose.yaw, entity);  // kinematic too: no Bullet body
   } else {
     vehicle.uav = std::make_unique<vehicles::Quadcopter>(b.world, scene_.uav.params, pose.position, pose.yaw);
     CopyState(vehicle.uav->State(), entity.body);
@@ -344,6 +349,10 @@ void World::StepPhysics(State& state, double dt) {
       StepWalker(vehicle, entity, dt);
       continue;
     }
+    if (!vehicle.car && !vehicle.uav) {  // a registered kind's (entity_kind_registry.h)
+      FindRegisteredKind(entity.kind)->behaviour->Step(entity, state, dt);
+      continue;
+    }
     if (vehicle.car) {
       vehicles::CarControls controls;
       if (entity.car_command.manual || !vehicle.driver) {
@@ -370,7 +379,7 @@ void World::StepPhysics(State& state, double dt) {
   b.world.stepSimulation(dt, 0);
   for (std::size_t i = 0; i < state.entities.size(); ++i) {
     const Vehicle& vehicle = b.vehicles[i];
-    if (Replayed(vehicle.id) || state.entities[i].kind == EntityKind::kPedestrian) continue;  // State holds its body
+    if (Replayed(vehicle.id) || (!vehicle.car && !vehicle.uav)) continue;  // kinematic: State holds its body
     CopyState(vehicle.car ? vehicle.car->State() : vehicle.uav->State(), state.entities[i].body);
   }
 }

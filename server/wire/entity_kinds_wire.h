@@ -4,7 +4,10 @@
 #pragma once
 
 #include <string>
+#include <type_traits>
+#include <vector>
 
+#include "server/sim/entity_kind_registry.h"
 #include "server/sim/entity_kinds.h"
 #include "sim4cv.pb.h"
 
@@ -26,16 +29,25 @@ constexpr proto::ObjectClass ObjectClassOf(sim::EntityKind kind) {
     SIM4CV_ENTITY_KINDS(SIM4CV_ENTITY_KIND_CLASS)
 #undef SIM4CV_ENTITY_KIND_CLASS
   }
-  return proto::OBJECT_CLASS_UNSPECIFIED;
+  if (std::is_constant_evaluated()) return proto::OBJECT_CLASS_UNSPECIFIED;
+  const sim::EntityKindEntry* registered = sim::FindRegisteredKind(kind);
+  return registered ? static_cast<proto::ObjectClass>(registered->object_class) : proto::OBJECT_CLASS_UNSPECIFIED;
 }
 
-// "ENTITY_KIND_CAR (1), ENTITY_KIND_UAV (2) or ENTITY_KIND_PEDESTRIAN (3)".
+// "ENTITY_KIND_CAR (1), ENTITY_KIND_UAV (2) or ENTITY_KIND_PEDESTRIAN (3)",
+// then the registered kinds by name ("beacon (9)").
 inline std::string EntityKindChoices() {
+  std::vector<std::string> choices;
+  for (const sim::EntityKindInfo& info : sim::kEntityKinds) {
+    const int value = static_cast<int>(info.kind);
+    choices.push_back(proto::EntityKind_Name(static_cast<proto::EntityKind>(value)) + " (" + std::to_string(value) + ")");
+  }
+  for (const sim::EntityKindEntry& entry : sim::RegisteredKinds()) {
+    choices.push_back(std::string(entry.info.name) + " (" + std::to_string(static_cast<int>(entry.info.kind)) + ")");
+  }
   std::string text;
-  for (std::size_t i = 0; i < sim::kEntityKinds.size(); ++i) {
-    const int value = static_cast<int>(sim::kEntityKinds[i].kind);
-    text += (i == 0 ? "" : i + 1 == sim::kEntityKinds.size() ? " or " : ", ") +
-            proto::EntityKind_Name(static_cast<proto::EntityKind>(value)) + " (" + std::to_string(value) + ")";
+  for (std::size_t i = 0; i < choices.size(); ++i) {
+    text += (i == 0 ? "" : i + 1 == choices.size() ? " or " : ", ") + choices[i];
   }
   return text;
 }

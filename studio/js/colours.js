@@ -4,6 +4,8 @@
 // as in clients/cpp/examples/channel_colours.cpp, semantic classes in the
 // protocol's palette, normals (n + 1) / 2, flow on the colour wheel.
 
+import { PIXEL_CHANNELS } from "./channel_table.js";
+
 // protocol/semantic_classes.h, value -> [r, g, b] (tests/studio checks it matches).
 export const SEMANTIC_COLOURS = {
   0: [128, 64, 128], 1: [244, 35, 232], 2: [70, 70, 70], 3: [102, 102, 156], 4: [190, 153, 153],
@@ -13,15 +15,10 @@ export const SEMANTIC_COLOURS = {
   20: [200, 200, 200], 21: [255, 128, 0], 22: [180, 100, 40], 255: [0, 0, 0],
 };
 
-// The channels a view can show: Subscribe's name, label, and the JSON enum.
-export const CHANNELS = [
-  { name: "rgb", label: "RGB", channel: "CHANNEL_RGB" },
-  { name: "depth", label: "depth", channel: "CHANNEL_DEPTH" },
-  { name: "mask", label: "instance ids", channel: "CHANNEL_MASK" },
-  { name: "semantic", label: "semantic", channel: "CHANNEL_SEMANTIC" },
-  { name: "normals", label: "normals", channel: "CHANNEL_NORMALS" },
-  { name: "flow", label: "optical flow", channel: "CHANNEL_FLOW" },
-];
+// The channels a view can show (protocol/channels.h's table, copied into
+// channel_table.js): Subscribe's name, label, and the JSON enum.
+const LABELS = { rgb: "RGB", mask: "instance ids", flow: "optical flow" };
+export const CHANNELS = PIXEL_CHANNELS.map(({ name, channel }) => ({ name, label: LABELS[name] ?? name, channel }));
 
 const semanticLut = new Uint8Array(256 * 3);
 for (const [value, rgb] of Object.entries(SEMANTIC_COLOURS)) semanticLut.set(rgb, Number(value) * 3);
@@ -85,6 +82,27 @@ export function toRgba(channel, bytes, out) {
     }
   } else if (channel === "CHANNEL_FLOW") {
     flowToRgba(typed(Float32Array, bytes), out, n);
+  } else {
+    greyToRgba(PIXEL_CHANNELS.find((c) => c.channel === channel), bytes, out, n);
+  }
+}
+
+// A channel with no colour map of its own: its first component in grey
+// levels from its smallest finite value (black) to its largest (white).
+function greyToRgba(info, bytes, out, n) {
+  if (!info) return;
+  const Type = { u8: Uint8Array, u16: Uint16Array, f32: Float32Array }[info.element];
+  const values = typed(Type, bytes);
+  let low = Infinity, high = -Infinity;
+  for (let i = 0; i < n; ++i) {
+    const v = values[info.components * i];
+    if (Number.isFinite(v)) low = Math.min(low, v), high = Math.max(high, v);
+  }
+  const scale = high > low ? 255 / (high - low) : 0;
+  for (let i = 0; i < n; ++i) {
+    const v = values[info.components * i];
+    out[4 * i] = out[4 * i + 1] = out[4 * i + 2] = Number.isFinite(v) ? (v - low) * scale : 0;
+    out[4 * i + 3] = 255;
   }
 }
 

@@ -87,6 +87,7 @@ import numpy as np
 import sim4cv
 from . import driving_control as dc
 from . import driving_metrics as dm
+from .channel_table import PIXEL_CHANNELS
 from .daemon import OwnDaemon
 from .driving_dataset import CAMERA_SETTINGS, WAYPOINT_COUNT, WAYPOINT_STEP_M, RoutePath, parse_map, \
     resolve_maps
@@ -108,15 +109,12 @@ PRESETS = tuple(PRESET_HOURS)
 CAMERA_KEYS = ("name", "width", "height", "fov_y_deg", "pitch_down_deg", "yaw_deg", "forward_m", "left_m",
                "above_body_m", "gimbal")
 ACTION_NAMES = ("steering", "throttle", "brake")
-# channel -> (components, dtype, low, high) of its observation array
-CHANNEL_SPECS = {
-    "rgb": (3, np.uint8, 0, 255),
-    "depth": (1, np.float32, 0.0, np.inf),
-    "mask": (1, np.uint16, 0, 65535),
-    "semantic": (1, np.uint8, 0, 255),
-    "normals": (3, np.float32, -1.0, 1.0),
-    "flow": (2, np.float32, -np.inf, np.inf),
-}
+# channel -> (components, dtype, low, high) of its observation array: the
+# element's whole range, but where the channel's values have narrower bounds.
+_ELEMENT_SPECS = {"u8": (np.uint8, 0, 255), "u16": (np.uint16, 0, 65535), "f32": (np.float32, -np.inf, np.inf)}
+_NARROWER = {"depth": (0.0, np.inf), "normals": (-1.0, 1.0)}
+CHANNEL_SPECS = {name: (components, _ELEMENT_SPECS[element][0]) + _NARROWER.get(name, _ELEMENT_SPECS[element][1:])
+                 for name, _, _, element, components, _, _ in PIXEL_CHANNELS}
 NON_PIXEL_CHANNELS = ("boxes",)
 
 

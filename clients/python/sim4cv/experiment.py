@@ -63,27 +63,11 @@ def _numbers(key, values, lo, hi):
 def check_tracker_spec(spec):
     """ExperimentError naming `spec` unless sim4cv.trackers would accept it
     (without starting it: no process, no import of a python: module)."""
-    from .trackers import _OPENCV, BASELINES
-    if not isinstance(spec, str) or not spec.strip():
-        raise ExperimentError("trackers: %r is not a tracker specification" % (spec,))
-    spec = spec.strip()
-    kind, _, rest = spec.partition(":")
-    if spec == "gt" or spec in BASELINES or (kind == "trax" and rest.strip()):
-        return spec
-    if kind == "opencv" and rest.lower() in _OPENCV:
-        return spec
-    if kind == "opencv":
-        raise ExperimentError("trackers: unknown tracker specification %r (OpenCV trackers: %s)"
-                              % (spec, ", ".join(sorted(_OPENCV))))
-    if kind == "python" and rest.count(":") == 1 and all(rest.split(":")):
-        return spec
-    if kind == "octave" and rest.strip().endswith(".m"):
-        if not os.path.isfile(os.path.abspath(rest.strip())):
-            raise ExperimentError("trackers: %r: no file %s (paths are relative to the working directory)"
-                                  % (spec, os.path.abspath(rest.strip())))
-        return spec
-    raise ExperimentError("trackers: unknown tracker specification %r (forms: gt, baseline:static, baseline:centre, "
-                          "opencv:NAME, trax:COMMAND, python:MODULE:FACTORY, octave:FILE.m)" % (spec,))
+    from . import trackers
+    try:
+        return trackers.check_tracker_spec(spec)
+    except ValueError as e:
+        raise ExperimentError("trackers: %s" % e) from None
 
 
 def _check_map(m, key="maps"):

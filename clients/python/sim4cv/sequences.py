@@ -48,13 +48,14 @@ import zlib
 import numpy as np
 
 from . import attributes as attrs
+from .channel_table import PIXEL_CHANNELS
 from .daemon import REPO_ROOT, OwnDaemon
 from .pilot import MODEL as PILOT_MODEL
 
 MAPS_DIR = os.path.join(REPO_ROOT, "scenes")
 TRACKING_MAPS = ["tracking/easy_desert", "tracking/easy_urban", "tracking/hard_desert", "tracking/hard_urban"]
 DEFAULT_SPEEDS = (4.0, 6.0, 8.0)
-EXTRA_CHANNELS = ("depth", "mask", "semantic", "normals", "flow")
+EXTRA_CHANNELS = tuple(row[0] for row in PIXEL_CHANNELS if row[0] != "rgb")  # saved beside img/, one folder each
 CONDITIONS = ("clear_noon", "clear_morning", "overcast", "fog", "dusk", "night", "rain")
 JPEG_QUALITY = 95
 PIPELINE_STEPS = 4  # lockstep Steps kept outstanding, so rendering overlaps our JPEG encoding

@@ -10,6 +10,7 @@ import ctypes.util
 import struct
 from typing import Dict, NamedTuple
 
+from . import channel_table
 from ._proto import pb
 from .errors import ShmLayoutError
 
@@ -27,9 +28,10 @@ MAX_BOXES = 128
 MAX_ENTITIES = 8
 ATTACH_BYTES = 256
 
-# The channel table (protocol/channels.h): pixel channels in plane order, bytes per pixel.
-PIXEL_CHANNELS = ((pb.CHANNEL_RGB, 3), (pb.CHANNEL_DEPTH, 4), (pb.CHANNEL_MASK, 2),
-                  (pb.CHANNEL_SEMANTIC, 1), (pb.CHANNEL_NORMALS, 12), (pb.CHANNEL_FLOW, 8))
+# The channel table (protocol/channels.h, copied by tools/channel_tables.py):
+# pixel channels in plane order, bytes per pixel.
+PIXEL_CHANNELS = tuple((pb.Channel.Value(channel), bytes_per_pixel)
+                       for _, channel, _, _, _, bytes_per_pixel, _ in channel_table.PIXEL_CHANNELS)
 ALL_PIXELS_MASK = sum(1 << c for c, _ in PIXEL_CHANNELS)
 
 # Frame object header offsets.

@@ -15,6 +15,7 @@ the top-left pixel at (0, 0). The ground-truth tracker needs the frame:
 `update(image, frame=...)` on every tracker takes it and only `gt` reads it.
 """
 
+import os
 from typing import Optional, Sequence, Tuple
 
 import numpy as np
@@ -188,21 +189,109 @@ class TraxTrackerAdapter(Tracker):
         self._tracker.close()
 
 
-def make_tracker(spec: str, target_id: int = 0, timeout: float = 30.0) -> Tracker:
-    """The tracker a specification names (module docstring). ValueError,
-    naming the specification and the accepted forms, for anything else."""
+class TrackerKind:
+    """A kind of tracker, named by the prefix before a specification's first
+    ':' ("opencv" in opencv:KCF). `form` says how it is written, for
+    messages; `accepts(rest)` whether REST (after the ':'; "" without one)
+    has that form; `check(rest)` raises ValueError naming what is wrong
+    without starting anything (experiment files are checked with it before
+    any run); `make(rest, target_id, timeout)` builds the Tracker."""
+
+    def __init__(self, form, make, accepts=bool, check=None):
+        self.form, self.make, self.accepts = form, make, accepts
+        self.check = check or (lambda rest: None)
+
+
+# The tracker kinds by prefix. A kind in a module of its own (with FORM,
+# accepts, make and optionally check at module level) is registered by one
+# line, register_tracker_kind("PREFIX", "package.module"), and imported
+# only when a specification names it (docs/architecture.md, "Extending sim4cv").
+TRACKER_KINDS = {}
+
+
+def register_tracker_kind(prefix, kind):
+    """Registers `kind` (a TrackerKind, or the name of a module that has
+    FORM, accepts, make and maybe check) for specifications PREFIX[:REST]."""
+    if ":" in prefix or not prefix:
+        raise ValueError("a tracker kind's prefix is one word without ':', not %r" % (prefix,))
+    TRACKER_KINDS[prefix] = kind
+
+
+def _kind(prefix):
+    kind = TRACKER_KINDS.get(prefix)
+    if isinstance(kind, str):
+        import importlib
+        module = importlib.import_module(kind)
+        kind = TRACKER_KINDS[prefix] = TrackerKind(module.FORM, module.make, module.accepts,
+                                                   getattr(module, "check", None))
+    return kind
+
+
+def _check_opencv(rest):
+    if rest.lower() not in _OPENCV:
+        raise ValueError("unknown tracker specification %r (OpenCV trackers: %s)"
+                         % ("opencv:" + rest, ", ".join(sorted(_OPENCV))))
+
+
+def _check_octave(rest):
+    if not rest.strip().endswith(".m"):
+        raise ValueError("unknown tracker specification %r (forms: %s)" % ("octave:" + rest, tracker_forms()))
+    if not os.path.isfile(os.path.abspath(rest.strip())):
+        raise ValueError("%r: no file %s (paths are relative to the working directory)"
+                         % ("octave:" + rest, os.path.abspath(rest.strip())))
+
+
+def _python_parts(rest):
+    return rest.count(":") == 1 and all(rest.split(":"))
+
+
+register_tracker_kind("gt", TrackerKind("gt", lambda rest, target_id, timeout: GroundTruthTracker(target_id),
+                                        accepts=lambda rest: rest == ""))
+register_tracker_kind("baseline", TrackerKind(", ".join(BASELINES), lambda rest, target_id, timeout:
+                                              BASELINES["baseline:" + rest](), accepts=lambda rest:
+                                              "baseline:" + rest in BASELINES))
+register_tracker_kind("opencv", TrackerKind("opencv:NAME", lambda rest, target_id, timeout: OpenCvTracker(rest),
+                                            check=_check_opencv))
+register_tracker_kind("trax", TrackerKind("trax:COMMAND LINE", lambda rest, target_id, timeout:
+                                          TraxTrackerAdapter("trax:" + rest, timeout),
+                                          accepts=lambda rest: bool(rest.strip())))
+register_tracker_kind("python", TrackerKind("python:MODULE:FACTORY", lambda rest, target_id, timeout:
+                                            PythonTracker(*rest.split(":"), timeout), accepts=_python_parts))
+register_tracker_kind("octave", TrackerKind("octave:FILE.m", lambda rest, target_id, timeout:
+                                            TraxTrackerAdapter("octave:" + rest, timeout),
+                                            accepts=lambda rest: bool(rest.strip()), check=_check_octave))
+
+
+def tracker_forms():
+    """"gt, baseline:static, ...": every registered kind's form, for messages."""
+    return ", ".join(_kind(prefix).form for prefix in list(TRACKER_KINDS))
+
+
+def _find_kind(spec):
+    """(kind, rest) for a specification of a registered kind's form, else ValueError naming the forms."""
+    prefix, colon, rest = spec.partition(":")
+    kind = _kind(prefix) if prefix in TRACKER_KINDS else None
+    if kind is None or (colon and not rest) or not kind.accepts(rest):
+        raise ValueError("tracker specification %r is none of: %s" % (spec, tracker_forms()))
+    return kind, rest
+
+
+def check_tracker_spec(spec):
+    """`spec`, stripped, if make_tracker would accept it (without starting it:
+    no process, no import of a python: module); else ValueError naming it."""
+    if not isinstance(spec, str) or not spec.strip():
+        raise ValueError("%r is not a tracker specification" % (spec,))
     spec = spec.strip()
-    if spec == "gt":
-        return GroundTruthTracker(target_id)
-    if spec in BASELINES:
-        return BASELINES[spec]()
-    kind, _, rest = spec.partition(":")
-    if kind == "opencv" and rest:
-        return OpenCvTracker(rest)
-    if kind == "python" and rest.count(":") == 1 and all(rest.split(":")):
-        module, factory = rest.split(":")
-        return PythonTracker(module, factory, timeout)
-    if kind in ("trax", "octave") and rest.strip():
-        return TraxTrackerAdapter(spec, timeout)
-    raise ValueError("tracker specification %r is none of: gt, baseline:static, baseline:centre, opencv:NAME, trax:COMMAND LINE, "
-                     "python:MODULE:FACTORY, octave:FILE.m" % (spec,))
+    try:
+        kind, rest = _find_kind(spec)
+    except ValueError:
+        raise ValueError("unknown tracker specification %r (forms: %s)" % (spec, tracker_forms())) from None
+    kind.check(rest)
+    return spec
+
+
+def make_tracker(spec: str, target_id: int = 0, timeout: float = 30.0) -> Tracker:
+    """The tracker a specification names (module docstring; TRACKER_KINDS).
+    ValueError, naming the specification and the accepted forms, for anything else."""
+    kind, rest = _find_kind(spec.strip())
+    return kind.make(rest, target_id, timeout)
