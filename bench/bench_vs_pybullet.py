@@ -21,7 +21,8 @@ Both sides run the same loop, one frame at a time, at 320x180 and 1280x720:
             walkers as capsule bodies with a sphere head moved along the road at 1.4 m/s.
 Reported per resolution: per-step wall time (median of each run, and the spread of those medians),
 steps per second and the ratio. Then the full look against the flat look (--quality fast),
-one daemon switched with SetConditions every --block frames, in one process.
+one daemon switched with SetConditions every --block frames, in one process; and four cameras
+against one at 320x180 in one daemon (--only pybullet|flat|cameras runs one of the three).
 """
 
 import argparse
@@ -261,6 +262,42 @@ def full_against_flat(args):
     return rows
 
 
+def four_against_one(args):
+    """Per-step wall time with one camera (the shm client's) and with four (plus car_front,
+    car_chase and a camera added on the UAV looking 45 deg down, each subscribed by a Python TCP
+    client to RGB, depth and mask in lockstep), alternating in one daemon at 320x180."""
+    daemon, client = start_sim4cv(320, 180, args.walkers)
+    times = {1: [], 4: []}
+    try:
+        client.add_camera("uav_45", mounted_on="uav", pitch_down_deg=45.0, gimbal=True)
+        address = "tcp://127.0.0.1:%s" % daemon.fields["tcp"]
+        sim4cv_steps(client, args.warmup)
+        for _ in range(args.runs):
+            times[1] += sim4cv_steps(client, args.frames)
+            others = []
+            try:
+                for camera in ("car_front", "car_chase", "uav_45"):
+                    others.append(sim4cv.connect(address, name="bench-" + camera))
+                    others[-1].subscribe(camera, ["rgb", "depth", "mask"], "lockstep")
+                everyone = [client] + others
+                for k in range(args.warmup + args.frames):
+                    t = time.perf_counter()
+                    for c in everyone:
+                        c.step()
+                    for c in everyone:
+                        frame = c.receive_frame()
+                        frame.image("rgb"), frame.image("depth"), frame.image("mask")
+                    if k >= args.warmup:
+                        times[4].append(time.perf_counter() - t)
+            finally:
+                for c in others:
+                    c.close()
+    finally:
+        client.close()
+        daemon.stop()
+    return times
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--frames", type=int, default=150, help="timed frames per run at 320x180 (a third at 1280x720)")
@@ -268,7 +305,7 @@ def main():
     p.add_argument("--warmup", type=int, default=10)
     p.add_argument("--walkers", type=int, default=10)
     p.add_argument("--block", type=int, default=10, help="frames per look before switching (full against flat)")
-    p.add_argument("--skip-flat", action="store_true")
+    p.add_argument("--only", choices=("pybullet", "flat", "cameras"), help="one comparison only")
     args = p.parse_args()
     started = time.monotonic()
     pybullet, pybullet_data, missing = load_pybullet()
@@ -276,6 +313,25 @@ def main():
         platform.processor() or platform.machine(), os.cpu_count(), " ".join("%.2f" % x for x in os.getloadavg()),
         platform.python_version(), "API %d, numpy %s" % (pybullet.getAPIVersion(), bool(pybullet.isNumpyEnabled()))
         if pybullet else "missing (%s)" % missing))
+    if args.only in (None, "pybullet"):
+        print_side_by_side(args, pybullet, pybullet_data)
+    if args.only in (None, "flat"):
+        print("\n| size | flat look (--quality fast) step | full look (default) step | full / flat |\n|---|---|---|---|")
+        for width, height, times in full_against_flat(args):
+            fast, full = statistics.median(times["fast"]), statistics.median(times["full"])
+            print("| %dx%d (%d frames each, blocks of %d) | %.2f ms | %.2f ms | %.2fx |" % (
+                width, height, len(times["full"]), args.block, fast * 1e3, full * 1e3, full / fast))
+    if args.only in (None, "cameras"):
+        times = four_against_one(args)
+        one, four = statistics.median(times[1]), statistics.median(times[4])
+        print("\n| 320x180, RGB + depth + mask | one camera (shm) | four cameras (shm + 3 TCP) | four / one |\n"
+              "|---|---|---|---|\n| step, median of %d frames each | %.2f ms | %.2f ms | %.2fx |"
+              % (len(times[1]), one * 1e3, four * 1e3, four / one))
+    print("\n(%.0f s; load average at the end %s)" % (time.monotonic() - started,
+                                                     " ".join("%.2f" % x for x in os.getloadavg())))
+
+
+def print_side_by_side(args, pybullet, pybullet_data):
     print("\n| size | sim4cv step, median of runs (spread) | sim4cv steps/s | pybullet step (spread) | "
           "pybullet steps/s | sim4cv / pybullet speed |\n|---|---|---|---|---|---|")
     for width, height, frames, ours, theirs in side_by_side(args, pybullet, pybullet_data):
@@ -289,14 +345,6 @@ def main():
         else:
             cells += ["-", "-", "-"]
         print("| " + " | ".join(cells) + " |")
-    if not args.skip_flat:
-        print("\n| size | flat look (--quality fast) step | full look (default) step | full / flat |\n|---|---|---|---|")
-        for width, height, times in full_against_flat(args):
-            fast, full = statistics.median(times["fast"]), statistics.median(times["full"])
-            print("| %dx%d (%d frames each, blocks of %d) | %.2f ms | %.2f ms | %.2fx |" % (
-                width, height, len(times["full"]), args.block, fast * 1e3, full * 1e3, full / fast))
-    print("\n(%.0f s; load average at the end %s)" % (time.monotonic() - started,
-                                                     " ".join("%.2f" % x for x in os.getloadavg())))
 
 
 if __name__ == "__main__":
