@@ -191,46 +191,61 @@ def full_against_flat(args):
             full.cpu_per_step_s() / fast.cpu_per_step_s()))
 
 
-def four_against_one(args):
-    """One camera (the shm client's) against four (plus car_front, car_chase and a camera added on
-    the UAV looking 45 deg down, each subscribed by a Python TCP client to RGB, depth and mask in
-    lockstep), alternating in one daemon at 320x180."""
-    daemon, client = start_sim4cv(320, 180, args.walkers)
-    meters = {1: Meter(daemon.proc.pid), 4: Meter(daemon.proc.pid)}
-    try:
-        client.add_camera("uav_45", mounted_on="uav", pitch_down_deg=45.0, gimbal=True)
-        address = "tcp://127.0.0.1:%s" % daemon.fields["tcp"]
-        sim4cv_warm(client, args.warmup)
-        while len(meters[4].times) < frames_for(args, 320) * args.runs:
-            meters[1].block(lambda: sim4cv_step(client), args.block)
-            # Three more lockstep subscribers for this block only (closing them ends their cameras' renders).
-            others = []
-            try:
-                for camera in ("car_front", "car_chase", "uav_45"):
-                    others.append(sim4cv.connect(address, name="bench-" + camera))
-                    others[-1].subscribe(camera, ["rgb", "depth", "mask"], "lockstep")
-                everyone = [client] + others
+# Three cameras added to the shm client's one (the UAV's): a surround rig on the UAV (the same
+# view turned 90, 180 and 270 deg: as much scene per camera as the first), and a mixed set (the
+# car's two cameras, which see the horizon and sky, and one on the UAV looking 45 deg down).
+CAMERA_SETS = {
+    "surround rig": [("uav_%d" % yaw, dict(mounted_on="uav", pitch_down_deg=60.0, yaw_deg=yaw, gimbal=True))
+                     for yaw in (90, 180, 270)],
+    "mixed": [("car_front", None), ("car_chase", None),
+              ("uav_45", dict(mounted_on="uav", pitch_down_deg=45.0, gimbal=True))],
+}
 
-                def step_all():
-                    for c in everyone:
-                        c.step()
-                    for c in everyone:
-                        frame = c.receive_frame()
-                        frame.image("rgb"), frame.image("depth"), frame.image("mask")
-                step_all()  # the first step with four cameras is not timed
-                meters[4].block(step_all, args.block)
-            finally:
-                for c in others:
-                    c.close()
-    finally:
-        client.close()
-        daemon.stop()
-    one, four = meters[1], meters[4]
-    print("\n| 320x180, RGB + depth + mask, lockstep | one camera (shm) | four cameras (shm + 3 TCP) | four / one |\n"
-          "|---|---|---|---|\n| step, median of %d frames each | %.2f ms | %.2f ms | **%.2fx** |\n"
-          "| CPU per step (daemon + client) | %.2f ms | %.2f ms | %.2fx |" % (
-              len(four.times), one.median_s() * 1e3, four.median_s() * 1e3, four.median_s() / one.median_s(),
-              one.cpu_per_step_s() * 1e3, four.cpu_per_step_s() * 1e3, four.cpu_per_step_s() / one.cpu_per_step_s()))
+
+def four_against_one(args):
+    """Per camera set: one camera (the shm client's) against four (the three more each subscribed
+    by a Python TCP client to RGB, depth and mask in lockstep), alternating in blocks in one
+    daemon at 320x180."""
+    print("\n| 320x180, RGB + depth + mask, lockstep | one camera (shm): step, CPU | four cameras (shm + 3 TCP): "
+          "step, CPU | four / one: wall, CPU |\n|---|---|---|---|")
+    for set_name, cameras in CAMERA_SETS.items():
+        daemon, client = start_sim4cv(320, 180, args.walkers)
+        meters = {1: Meter(daemon.proc.pid), 4: Meter(daemon.proc.pid)}
+        try:
+            for name, spec in cameras:
+                if spec is not None:
+                    client.add_camera(name, **spec)
+            address = "tcp://127.0.0.1:%s" % daemon.fields["tcp"]
+            sim4cv_warm(client, args.warmup)
+            while len(meters[4].times) < frames_for(args, 320) * args.runs:
+                meters[1].block(lambda: sim4cv_step(client), args.block)
+                # Three more lockstep subscribers for this block only (closing them ends their cameras' renders).
+                others = []
+                try:
+                    for name, _ in cameras:
+                        others.append(sim4cv.connect(address, name="bench-" + name))
+                        others[-1].subscribe(name, ["rgb", "depth", "mask"], "lockstep")
+                    everyone = [client] + others
+
+                    def step_all():
+                        for c in everyone:
+                            c.step()
+                        for c in everyone:
+                            frame = c.receive_frame()
+                            frame.image("rgb"), frame.image("depth"), frame.image("mask")
+                    step_all()  # the first step with four cameras is not timed
+                    meters[4].block(step_all, args.block)
+                finally:
+                    for c in others:
+                        c.close()
+        finally:
+            client.close()
+            daemon.stop()
+        one, four = meters[1], meters[4]
+        print("| %s (%s), %d frames each | %.2f ms, %.2f ms | %.2f ms, %.2f ms | **%.2fx**, %.2fx |" % (
+            set_name, ", ".join(name for name, _ in cameras), len(four.times), one.median_s() * 1e3,
+            one.cpu_per_step_s() * 1e3, four.median_s() * 1e3, four.cpu_per_step_s() * 1e3,
+            four.median_s() / one.median_s(), four.cpu_per_step_s() / one.cpu_per_step_s()))
 
 
 def load_pybullet():
