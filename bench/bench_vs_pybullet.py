@@ -59,18 +59,18 @@ class Meter:
 
     def __init__(self, daemon_pid=None):
         self.daemon_pid = daemon_pid
-        self.times, self.cpu = [], 0.0
-
-    def cpu_now(self):
-        return time.process_time() + (process_cpu_seconds(self.daemon_pid) if self.daemon_pid else 0.0)
+        self.times, self.cpu, self.daemon_cpu = [], 0.0, 0.0
 
     def block(self, step, count):
-        start = self.cpu_now()
+        client_start = time.process_time()
+        daemon_start = process_cpu_seconds(self.daemon_pid) if self.daemon_pid else 0.0
         for _ in range(count):
             t = time.perf_counter()
             step()
             self.times.append(time.perf_counter() - t)
-        self.cpu += self.cpu_now() - start
+        daemon = (process_cpu_seconds(self.daemon_pid) - daemon_start) if self.daemon_pid else 0.0
+        self.daemon_cpu += daemon
+        self.cpu += time.process_time() - client_start + daemon
 
     def median_s(self):
         return statistics.median(self.times)
@@ -206,8 +206,8 @@ def four_against_one(args):
     """Per camera set: one camera (the shm client's) against four (the three more each subscribed
     by a Python TCP client to RGB, depth and mask in lockstep), alternating in blocks in one
     daemon at 320x180."""
-    print("\n| 320x180, RGB + depth + mask, lockstep | one camera (shm): step, CPU | four cameras (shm + 3 TCP): "
-          "step, CPU | four / one: wall, CPU |\n|---|---|---|---|")
+    print("\n| 320x180, RGB + depth + mask, lockstep | one camera (shm): step, CPU (daemon's) | four cameras (shm + "
+          "3 TCP): step, CPU (daemon's) | four / one: wall, CPU, daemon's CPU |\n|---|---|---|---|")
     for set_name, cameras in CAMERA_SETS.items():
         daemon, client = start_sim4cv(320, 180, args.walkers)
         meters = {1: Meter(daemon.proc.pid), 4: Meter(daemon.proc.pid)}
@@ -242,10 +242,12 @@ def four_against_one(args):
             client.close()
             daemon.stop()
         one, four = meters[1], meters[4]
-        print("| %s (%s), %d frames each | %.2f ms, %.2f ms | %.2f ms, %.2f ms | **%.2fx**, %.2fx |" % (
-            set_name, ", ".join(name for name, _ in cameras), len(four.times), one.median_s() * 1e3,
-            one.cpu_per_step_s() * 1e3, four.median_s() * 1e3, four.cpu_per_step_s() * 1e3,
-            four.median_s() / one.median_s(), four.cpu_per_step_s() / one.cpu_per_step_s()))
+        print("| %s (%s), %d frames each | %.2f ms, %.2f ms (%.2f) | %.2f ms, %.2f ms (%.2f) | **%.2fx**, %.2fx, %.2fx |"
+              % (set_name, ", ".join(name for name, _ in cameras), len(four.times), one.median_s() * 1e3,
+                 one.cpu_per_step_s() * 1e3, one.daemon_cpu / len(one.times) * 1e3, four.median_s() * 1e3,
+                 four.cpu_per_step_s() * 1e3, four.daemon_cpu / len(four.times) * 1e3,
+                 four.median_s() / one.median_s(), four.cpu_per_step_s() / one.cpu_per_step_s(),
+                 four.daemon_cpu / one.daemon_cpu * len(one.times) / len(four.times)))
 
 
 def load_pybullet():
