@@ -64,6 +64,7 @@ std::string FragmentShader(PlaneSet planes, uint32_t look) {
   if (look & ChannelProgram::kLamps) declarations.insert(after_version, "#define SIM4CV_LAMPS\n");
   if (look & ChannelProgram::kShadows) declarations.insert(after_version, "#define SIM4CV_SHADOWS\n");
   if (look & ChannelProgram::kFull) declarations.insert(after_version, "#define SIM4CV_FULL_LOOK\n");
+  if (look & ChannelProgram::kFlatGround) declarations.insert(after_version, "#define SIM4CV_FLAT_GROUND\n");
   std::string body = "void main() {\n";
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     if ((planes & (1u << i)) == 0) continue;

@@ -19,9 +19,11 @@ class ChannelProgram {
  public:
   // How RGB is drawn, as compile-time switches of the GLSL (llvmpipe would
   // pay for a uniform branch's untaken side): the full look (else the
-  // fast one), and in the full look sun shadows, sensor noise and lanterns.
-  enum RgbLook : uint32_t { kFast = 0, kFull = 1, kShadows = 2, kNoise = 4, kLamps = 8 };
-  inline static constexpr uint32_t kRgbLooks = 16;  // every combination of the bits
+  // fast one), and in the full look sun shadows, sensor noise and lanterns;
+  // kFlatGround: the full look's program for flat ground only (road, sidewalk,
+  // terrain, markings), without the other classes' materials.
+  enum RgbLook : uint32_t { kFast = 0, kFull = 1, kShadows = 2, kNoise = 4, kLamps = 8, kFlatGround = 16 };
+  inline static constexpr uint32_t kRgbLooks = 32;  // every combination of the bits
   ChannelProgram(PlaneSet planes, uint32_t look);
   ~ChannelProgram();
   ChannelProgram(const ChannelProgram&) = delete;

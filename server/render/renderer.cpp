@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -165,8 +166,9 @@ struct Renderer::Impl {
   void Draw(const DrawItem& item) const;
   // The draw call of one mesh, with whatever program and uniforms are set.
   void DrawMesh(MeshId mesh) const;
+  // Objects first, then flat ground after calling `before_ground`.
   void DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
-                 std::span<uint32_t> unoccluded_pixels);
+                 std::span<uint32_t> unoccluded_pixels, const std::function<void()>& before_ground);
   // Draws the sun's shadow map of `items` for `camera`; how to sample it.
   ShadowSampling DrawShadows(const CameraView& camera, std::span<const DrawItem> items);
   // Reads the planes in `through` from the effects pass, the rest from the scene.
@@ -268,7 +270,7 @@ void Renderer::Impl::DrawMesh(MeshId id) const {
 }
 
 void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
-                               std::span<uint32_t> unoccluded_pixels) {
+                               std::span<uint32_t> unoccluded_pixels, const std::function<void()>& before_ground) {
   // Write masks first: clears obey them, and the previous frame's counting pass turned them off.
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
@@ -302,6 +304,7 @@ void Renderer::Impl::DrawScene(std::span<const DrawItem> items, const std::array
   // under the objects before its fragments are shaded (llvmpipe tests depth
   // early), instead of shading those pixels twice.
   for (const bool ground_pass : {false, true}) {
+    if (ground_pass) before_ground();
     for (uint32_t i = 0; i < items.size(); ++i) {
       const DrawItem& item = items[i];
       const MeshRange& mesh = meshes[item.mesh];
@@ -330,33 +333,44 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CW);
-  UsePlanes(into, planes, rgb_look);
-  glUniformMatrix4fv(program->u_view, 1, GL_FALSE, pass.view.data());
-  glUniformMatrix4fv(program->u_projection, 1, GL_FALSE, top_row_first.data());
-  glUniformMatrix4fv(program->u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
-  glUniform3fv(program->u_to_light, 1, to_light.data());
-  glUniform2fv(program->u_viewport, 1, viewport.data());
-  if (full_rgb) program->look.Apply(look, camera_position, pass.shadow, camera.noise_seed);
+  int lamp_count = 0, headlight_count = 0;
   if ((rgb_look & ChannelProgram::kLamps) != 0) {
     const Eigen::Vector3f ahead = camera_position - 15.0f * camera.world_from_camera.block<3, 1>(0, 2);
-    const int count = Nearest(
+    lamp_count = Nearest(
         lamps.size(), [&](uint32_t i) { return lamps[i]; }, ahead, kMaxLamps);
-    for (int i = 0; i < count; ++i)
+    for (int i = 0; i < lamp_count; ++i)
       nearest_lamps[static_cast<std::size_t>(i)] = lamps[light_order[static_cast<std::size_t>(i)].second];
-    glUniform3fv(program->u_lamps, count, nearest_lamps[0].data());
-    glUniform1i(program->u_lamp_count, count);
-    const int cars = Nearest(
+    headlight_count = Nearest(
         headlights.size(), [&](uint32_t i) { return headlights[i].position; }, ahead, kMaxHeadlights);
-    for (int i = 0; i < cars; ++i) {
+    for (int i = 0; i < headlight_count; ++i) {
       const Headlight& car = headlights[light_order[static_cast<std::size_t>(i)].second];
       nearest_headlights[static_cast<std::size_t>(i)] = car.position;
       nearest_directions[static_cast<std::size_t>(i)] = car.direction;
     }
-    glUniform3fv(program->u_headlights, cars, nearest_headlights[0].data());
-    glUniform3fv(program->u_headlight_directions, cars, nearest_directions[0].data());
-    glUniform1i(program->u_headlight_count, cars);
   }
-  DrawScene(items, FrustumPlanes(pass.projection * pass.view), unoccluded_pixels);
+  // The program of `program_look` made current with this pass's uniforms.
+  const auto use = [&](uint32_t program_look) {
+    UsePlanes(into, planes, program_look);
+    glUniformMatrix4fv(program->u_view, 1, GL_FALSE, pass.view.data());
+    glUniformMatrix4fv(program->u_projection, 1, GL_FALSE, top_row_first.data());
+    glUniformMatrix4fv(program->u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
+    glUniform3fv(program->u_to_light, 1, to_light.data());
+    glUniform2fv(program->u_viewport, 1, viewport.data());
+    if (full_rgb) program->look.Apply(look, camera_position, pass.shadow, camera.noise_seed);
+    if ((program_look & ChannelProgram::kLamps) != 0) {
+      glUniform3fv(program->u_lamps, lamp_count, nearest_lamps[0].data());
+      glUniform1i(program->u_lamp_count, lamp_count);
+      glUniform3fv(program->u_headlights, headlight_count, nearest_headlights[0].data());
+      glUniform3fv(program->u_headlight_directions, headlight_count, nearest_directions[0].data());
+      glUniform1i(program->u_headlight_count, headlight_count);
+    }
+  };
+  use(rgb_look);
+  // The full look draws flat ground (last) with its own, shorter program.
+  const auto before_ground = [&] {
+    if (full_rgb) use(rgb_look | ChannelProgram::kFlatGround);
+  };
+  DrawScene(items, FrustumPlanes(pass.projection * pass.view), unoccluded_pixels, before_ground);
   if (full_rgb) {
     if (!sky) sky = std::make_unique<SkyPass>();
     sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * pass.view, camera_position, look, camera.noise_seed);

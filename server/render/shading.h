@@ -139,6 +139,9 @@ struct Surface {
 vec4 PatternOf(uint c) {
   if (c == 0u || c == 19u || c == 20u) return vec4(0.35, 0.45, 25.0, 0.15);  // asphalt and paint
   if (c == 1u) return vec4(0.5, 0.15, 2.0, 0.25);                            // 0.5 m sidewalk tiles
+#ifdef SIM4CV_FLAT_GROUND
+  return vec4(0.12, 0.6, 3.0, 0.2);  // the only flat ground class left: terrain (9)
+#endif
   if (c == 9u) return vec4(0.12, 0.6, 3.0, 0.2);                             // grass, sand
   if (c == 8u) return vec4(2.3, 0.9, 6.0, 0.3);                              // leaves
   if (c == 2u) return vec4(0.5, 0.3, 4.0, 0.1);                              // plaster
@@ -168,6 +171,10 @@ Surface Material(uint c, vec3 base, vec3 p, vec3 n, float distance) {
   if (c == 9u && base.r > base.g) {  // sand: ripples across the wind
     s.albedo *= 1.0 + 0.1 * sin(p.x * 2.2 + p.y * 0.7 + 4.0 * blotch) * detail;
   }
+// Flat ground (Renderer's FlatGround classes: 0, 1, 9, 19, 20) is drawn by
+// a program of its own without the other classes' materials: most pixels
+// are ground, and llvmpipe would run every class's code for each of them.
+#ifndef SIM4CV_FLAT_GROUND
   if (c >= 13u && c <= 18u) {  // vehicle paint: clear coat
     s.specular = 1.2;
     s.shininess = 80.0;
@@ -196,6 +203,7 @@ Surface Material(uint c, vec3 base, vec3 p, vec3 n, float distance) {
       s.emission = vec3(1.0, 0.75, 0.45) * step(0.55, Hash(floor(window_cell) + block * 31.0)) * u_weather.z * 0.6;
     }
   }
+#endif
   if (flat_ground) {  // wet: darker, and puddles that mirror the sky
     float wet = u_weather.y;
     float puddle = (c == 0u) ? smoothstep(0.62, 0.75, blotch) : 0.0;

@@ -51,7 +51,7 @@ void MakeDepthTarget(GLsizei size, GLuint& texture, GLuint& framebuffer) {
 
 ShadowMap::ShadowMap(GLsizei size, float radius_m) : size_(size), radius_m_(radius_m) {
   MakeDepthTarget(size_, texture_, framebuffer_);
-  MakeDepthTarget(size_, fixed_texture_, fixed_framebuffer_);
+  for (FixedDepth& entry : fixed_) MakeDepthTarget(size_, entry.texture, entry.framebuffer);
   program_ = LinkProgram(kVertexShader, kFragmentShader);
   u_model_ = RequireUniform(program_, "u_model");
   u_clip_from_world_ = RequireUniform(program_, "u_clip_from_world");
@@ -60,8 +60,10 @@ ShadowMap::ShadowMap(GLsizei size, float radius_m) : size_(size), radius_m_(radi
 
 ShadowMap::~ShadowMap() {
   glDeleteProgram(program_);
-  glDeleteFramebuffers(1, &fixed_framebuffer_);
-  glDeleteTextures(1, &fixed_texture_);
+  for (FixedDepth& entry : fixed_) {
+    glDeleteFramebuffers(1, &entry.framebuffer);
+    glDeleteTextures(1, &entry.texture);
+  }
   glDeleteFramebuffers(1, &framebuffer_);
   glDeleteTextures(1, &texture_);
 }
@@ -99,8 +101,14 @@ Eigen::Matrix4f ShadowMap::Fit(const CameraView& camera, const Eigen::Vector3f& 
   return ortho * sun_from_world;
 }
 
-bool ShadowMap::FixedCastersCached(const Eigen::Matrix4f& clip_from_world) const {
-  return fixed_valid_ && fixed_clip_from_world_ == clip_from_world;
+bool ShadowMap::FixedCastersCached(const Eigen::Matrix4f& clip_from_world) {
+  for (std::size_t i = 0; i < fixed_.size(); ++i) {
+    if (fixed_[i].valid && fixed_[i].clip_from_world == clip_from_world) {
+      current_ = i;
+      return true;
+    }
+  }
+  return false;
 }
 
 void ShadowMap::Bind(GLuint framebuffer, const Eigen::Matrix4f& clip_from_world) const {
@@ -118,14 +126,22 @@ void ShadowMap::Bind(GLuint framebuffer, const Eigen::Matrix4f& clip_from_world)
 }
 
 void ShadowMap::BeginFixed(const Eigen::Matrix4f& clip_from_world) {
-  Bind(fixed_framebuffer_, clip_from_world);
+  current_ = 0;  // an unused entry, else the least recently used one
+  for (std::size_t i = 1; i < fixed_.size(); ++i) {
+    const FixedDepth& best = fixed_[current_];
+    if (best.valid && (!fixed_[i].valid || fixed_[i].last_used < best.last_used)) current_ = i;
+  }
+  FixedDepth& entry = fixed_[current_];
+  Bind(entry.framebuffer, clip_from_world);
   glClear(GL_DEPTH_BUFFER_BIT);
-  fixed_valid_ = true;
-  fixed_clip_from_world_ = clip_from_world;
+  entry.valid = true;
+  entry.clip_from_world = clip_from_world;
 }
 
-void ShadowMap::BeginMoving(const Eigen::Matrix4f& clip_from_world) const {
-  glCopyImageSubData(fixed_texture_, GL_TEXTURE_2D, 0, 0, 0, 0, texture_, GL_TEXTURE_2D, 0, 0, 0, 0, size_, size_, 1);
+void ShadowMap::BeginMoving(const Eigen::Matrix4f& clip_from_world) {
+  FixedDepth& entry = fixed_[current_];
+  entry.last_used = ++uses_;
+  glCopyImageSubData(entry.texture, GL_TEXTURE_2D, 0, 0, 0, 0, texture_, GL_TEXTURE_2D, 0, 0, 0, 0, size_, size_, 1);
   Bind(framebuffer_, clip_from_world);
 }
 

@@ -3,10 +3,17 @@
 // steps of kSnapM so shadow edges do not crawl as the camera moves and the
 // fixed casters' depth (most of the geometry) is drawn only when the map
 // moves or the sun turns; each frame copies it and adds the moving casters.
+// The fixed casters' depth is kept for the last kFixedEntries fits, so that
+// several cameras (each with its own fit) each find theirs instead of
+// redrawing the fixed casters every frame.
 // Needs a current GL context; owns its textures, framebuffers and program.
 #pragma once
 
 #define GL_GLEXT_PROTOTYPES
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
 #include <GL/gl.h>
 #include <GL/glext.h>
 
@@ -29,14 +36,16 @@ class ShadowMap {
   // camera looks at, snapped to whole texels.
   Eigen::Matrix4f Fit(const CameraView& camera, const Eigen::Vector3f& to_sun) const;
 
-  // Whether the fixed casters' depth drawn last is for `clip_from_world`.
-  bool FixedCastersCached(const Eigen::Matrix4f& clip_from_world) const;
-  // Binds the fixed casters' framebuffer and depth-only program and clears
+  // Whether the fixed casters' depth for `clip_from_world` is kept; if so,
+  // BeginMoving uses it.
+  bool FixedCastersCached(const Eigen::Matrix4f& clip_from_world);
+  // Binds a framebuffer for the fixed casters' depth of `clip_from_world`
+  // (the least recently used one) and the depth-only program, and clears
   // it; the caller draws them with ModelLocation() set per item.
   void BeginFixed(const Eigen::Matrix4f& clip_from_world);
-  // Copies the fixed casters' depth into the map and binds it for the
-  // moving casters, drawn the same way; then End().
-  void BeginMoving(const Eigen::Matrix4f& clip_from_world) const;
+  // Copies the fixed casters' depth found or drawn last into the map and
+  // binds it for the moving casters, drawn the same way; then End().
+  void BeginMoving(const Eigen::Matrix4f& clip_from_world);
   GLint ModelLocation() const { return u_model_; }
   // How the RGB pass samples what was drawn.
   ShadowSampling End(const Eigen::Matrix4f& clip_from_world) const;
@@ -47,10 +56,18 @@ class ShadowMap {
   GLsizei size_;
   float radius_m_;
   GLuint texture_ = 0, framebuffer_ = 0, program_ = 0;
-  GLuint fixed_texture_ = 0, fixed_framebuffer_ = 0;
   GLint u_model_ = -1, u_clip_from_world_ = -1;
-  bool fixed_valid_ = false;
-  Eigen::Matrix4f fixed_clip_from_world_ = Eigen::Matrix4f::Zero();
+  // Up to four cameras keep their own; more take turns (least recently used).
+  static constexpr std::size_t kFixedEntries = 4;
+  struct FixedDepth {
+    GLuint texture = 0, framebuffer = 0;
+    bool valid = false;
+    Eigen::Matrix4f clip_from_world = Eigen::Matrix4f::Zero();
+    uint64_t last_used = 0;
+  };
+  std::array<FixedDepth, kFixedEntries> fixed_;
+  std::size_t current_ = 0;  // the entry BeginMoving copies
+  uint64_t uses_ = 0;
 };
 
 }  // namespace sim4cv::render

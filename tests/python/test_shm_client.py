@@ -47,7 +47,9 @@ def test_shm_frame_equals_the_same_frame_over_tcp(start_transports_daemon):
     with tcp, _shm(daemon) as shm:
         tcp.subscribe("uav", ["rgb"], "lockstep")
         shm.subscribe("uav", ["rgb"], "lockstep")
-        for _ in range(3):  # both step: the simulation advances when every lockstep client has
+        # Both step (the simulation advances when every lockstep client has), past the ring's
+        # last slot, so every slot's views (made once per slot) are read again for a newer frame.
+        for _ in range(shm.ring_geometry.slot_count + 2):
             shm.step()
             over_tcp = tcp.step_and_receive()
             over_shm = shm.receive_frame()

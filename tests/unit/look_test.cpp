@@ -225,6 +225,26 @@ TEST_F(LookRenderTest, CachedShadowsOfFixedCastersAgreeWithAFreshRenderer) {
   EXPECT_TRUE(SameBytes(warm.frame.rgb, cold.frame.rgb));
 }
 
+// Each camera keeps its own fixed casters' depth (up to four): rendering the
+// three cameras in turn, each reusing its own, draws what a fresh renderer does.
+TEST_F(LookRenderTest, ShadowsCachedPerCameraAgreeWithAFreshRendererForEachCamera) {
+  const conditions::Conditions morning = conditions::Of(Preset::CLEAR_MORNING);
+  for (std::size_t i = 0; i < 3; ++i) Render(i, morning);  // primes each camera's entry
+  sim::State later = *state_;
+  later.entities.front().body.position += Eigen::Vector3d(0.6, 0.4, 0.0);  // the car moves, the UAV stays
+  graphics_->Update(later);
+  std::vector<Shot> warm;
+  for (std::size_t i = 0; i < 3; ++i) warm.push_back(Render(i, morning));
+  for (std::size_t i = 0; i < 3; ++i) {
+    SCOPED_TRACE(i);
+    Renderer one_camera(graphics_->meshes(), kWidth, kHeight);
+    one_camera.SetLook(LookOf(morning));
+    const Shot cold = UrbanRenderTest::Render(View(i), one_camera);
+    EXPECT_TRUE(SameBytes(warm[i].frame.rgb, cold.frame.rgb));
+  }
+  graphics_->Update(*state_);
+}
+
 TEST_F(LookRenderTest, StreetLanternsLightTheRoadAtNightOnly) {
   ASSERT_GT(graphics_->lamps().size(), 8u) << "the urban map has lanterns";
   const auto lit_against_unlit = [](const conditions::Conditions& conditions) {

@@ -20,9 +20,17 @@ def _enum_value(enum, prefix, value):
     return int(value)
 
 
+_CHANNEL_VALUES = {}  # name -> value, filled as names are asked for: a frame loop asks for the same few
+
+
 def channel_value(channel) -> int:
     """CHANNEL_* value for an int or a name such as "rgb", "DEPTH", "CHANNEL_MASK"."""
-    return _enum_value(pb.Channel, "CHANNEL_", channel)
+    if isinstance(channel, str):
+        value = _CHANNEL_VALUES.get(channel)
+        if value is None:
+            value = _CHANNEL_VALUES[channel] = _enum_value(pb.Channel, "CHANNEL_", channel)
+        return value
+    return int(channel)
 
 
 def delivery_value(delivery) -> int:

@@ -75,8 +75,7 @@ class ShmFrame(Frame):
             raise KeyError("frame %d does not carry channel %s (the ring carries %s)" % (
                 self.frame_id, channel_name(channel),
                 ", ".join(channel_name(c)[8:].lower() for c in self._planes))) from None
-        return plane_view(self._ring.frames, offset, self.width, self.height, stride, element, components,
-                          "shared-memory plane of %s" % channel_name(channel))
+        return self._ring.view(offset, self.width, self.height, stride, element, components, channel)
 
     def copy(self) -> Frame:
         """A Frame owning copies of every plane, taken consistently
@@ -115,6 +114,18 @@ class _Ring:
         self.words64 = np.frombuffer(self.frames, dtype="<u8", count=size // 8)
         self.words32 = np.frombuffer(self.frames, dtype="<u4", count=size // 4)
         self.address = self.words32.ctypes.data
+        # Views of the slots' planes: the same few (slot x channel) every frame, so made once.
+        self._views = {}
+        self._channel_records = struct.Struct("<" + L.CHANNEL_RECORD.format.lstrip("<") * L.MAX_CHANNELS)
+
+    def view(self, offset, width, height, stride, element, components, channel):
+        """A read-only numpy view of a plane of the mapped object (made once per plane place and shape)."""
+        key = (offset, width, height, stride, element, components)
+        view = self._views.get(key)
+        if view is None:
+            view = self._views[key] = plane_view(self.frames, offset, width, height, stride, element, components,
+                                                 "shared-memory plane of %s" % channel_name(channel))
+        return view
 
     def published(self):
         return int(self.words64[L.OFF_PUBLISHED // 8])
@@ -139,9 +150,9 @@ class _Ring:
             head = L.SLOT_HEAD.unpack_from(self.frames, base)
             mask, box_count, entity_count = head[7], min(head[9], L.MAX_BOXES), min(head[11], L.MAX_ENTITIES)
             planes = {}
-            for i in range(L.MAX_CHANNELS):
-                channel, _, stride, _, element, components, offset, nbytes = L.CHANNEL_RECORD.unpack_from(
-                    self.frames, base + L.OFF_CHANNELS + i * 32)
+            records = self._channel_records.unpack_from(self.frames, base + L.OFF_CHANNELS)
+            for i in range(0, len(records), 8):  # 8 fields a record
+                channel, _, stride, _, element, components, offset, nbytes = records[i:i + 8]
                 if nbytes and mask & (1 << channel) and g.plane_offsets.get(channel) == offset \
                         and nbytes <= g.slot_bytes - offset:
                     planes[channel] = (base + offset, stride, element, components)
