@@ -25,7 +25,10 @@ using namespace std::chrono_literals;
 class UdpBadInputTest : public UdpDaemonTest {
  protected:
   void SetUp() override {
-    StartDaemon();
+    // The healthy client says nothing while a flood runs (seconds on a busy
+    // machine, the daemon stopped for some of them): its registration must
+    // outlast that, which the default 5 s expiry did not.
+    StartDaemon({"--udp-expiry-ms", "120000"});
     healthy_ = ConnectUdp("healthy");
     healthy_->Subscribe("uav", {proto::CHANNEL_RGB, proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
   }
