@@ -3,7 +3,9 @@
 // the whole file. The reader may refuse a file with std::invalid_argument
 // (not a log, corruption in the middle, frame ids out of order); anything
 // else it throws, or a crash, is a finding. The file lives in a memfd opened
-// by path, because the reader maps a path.
+// by path, because the reader maps a path: one per process, overwritten and
+// then cut to the input's length (cutting it to 0 first would free and
+// fault in its pages again for every input).
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -29,13 +31,13 @@ const std::string& LogPath() {
 
 void WriteInput(const uint8_t* data, std::size_t size) {
   const int fd = std::stoi(LogPath().substr(LogPath().rfind('/') + 1));
-  if (ftruncate(fd, 0) != 0) std::abort();
   std::size_t at = 0;
   while (at < size) {
     const ssize_t wrote = pwrite(fd, data + at, size - at, static_cast<off_t>(at));
     if (wrote <= 0) std::abort();
     at += static_cast<std::size_t>(wrote);
   }
+  if (ftruncate(fd, static_cast<off_t>(size)) != 0) std::abort();
 }
 
 }  // namespace

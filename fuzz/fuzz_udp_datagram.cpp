@@ -120,7 +120,15 @@ class Daemon {
     reply_.AppendToString(&reply_bytes_);  // what SendReply puts in the datagram
   }
 
-  std::shared_ptr<sim4cv::transport::Wakeup> wakeup_ = std::make_shared<sim4cv::transport::Wakeup>();
+  // One eventfd for the process, as the transport has one for all its peers;
+  // cleared before each input as the transport's thread clears it before it looks for work.
+  static std::shared_ptr<sim4cv::transport::Wakeup> SharedWakeup() {
+    static const auto wakeup = std::make_shared<sim4cv::transport::Wakeup>();
+    wakeup->Clear();
+    return wakeup;
+  }
+
+  std::shared_ptr<sim4cv::transport::Wakeup> wakeup_ = SharedWakeup();
   std::array<std::shared_ptr<UdpPeer>, kSenders> peers_;
   sim4cv::proto::Envelope request_, reply_;
   std::vector<sim4cv::proto::Envelope> offered_;

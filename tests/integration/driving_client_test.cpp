@@ -67,7 +67,8 @@ class DrivingClientTest : public DaemonTest {
   // scene's own car; returns its id and its state before anyone drives it.
   uint32_t SpawnEgo(Client& client, proto::EntityState& parked) {
     const uint32_t id = client.Spawn(proto::ENTITY_KIND_CAR, "ego", 0, -42, 0, 0);
-    const proto::EntityState* ego = Find(client.GetState(), id);
+    const proto::State state = client.GetState();  // Find points into it: it must outlive the pointer
+    const proto::EntityState* ego = Find(state, id);
     if (ego) parked = *ego;
     return id;
   }
@@ -153,7 +154,8 @@ TEST_F(DrivingClientTest, DrivesInRealtimeWithUdpControlsAndTheLaneFlip) {
   EXPECT_NE(run.output.find(udp), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("left lane: image flipped"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("drove 20 frames in "), std::string::npos) << run.output;
-  const proto::EntityState* after = Find(client->GetState(), ego);
+  const proto::State state = client->GetState();  // Find points into it: it must outlive the pointer
+  const proto::EntityState* after = Find(state, ego);
   ASSERT_NE(after, nullptr);
   EXPECT_GT(Moved(parked, *after), 0.05) << after->ShortDebugString() << "\n" << run.output;
 }

@@ -13,6 +13,7 @@
 
 #include "server/common/limits.h"
 #include "tests/integration/daemon_fixture.h"
+#include "tests/support/sanitizer_build.h"
 
 namespace sim4cv::testing {
 namespace {
@@ -125,8 +126,10 @@ TEST_F(FramesHeldTest, LockstepClientsThatNeverReadHoldAFewFramesAndTheMemoryCom
     std::this_thread::sleep_for(200ms);
     after = daemon_->rss_bytes();
   }
-  EXPECT_LE(after, near_baseline) << "RSS stayed at " << after / kMiB << " MiB after the clients left; baseline "
-                                  << baseline / kMiB << " MiB";
+  if (kRssBoundsHold) {
+    EXPECT_LE(after, near_baseline) << "RSS stayed at " << after / kMiB << " MiB after the clients left; baseline "
+        << baseline / kMiB << " MiB";
+  }
   std::cout << "[ numbers  ] after they left: " << after / kMiB << " MiB\n";
 
   // And the daemon serves a new lockstep client as before.

@@ -15,6 +15,7 @@
 #include "server/common/limits.h"
 #include "tests/integration/daemon_fixture.h"
 #include "tests/integration/raw_connection.h"
+#include "tests/support/sanitizer_build.h"
 
 namespace sim4cv::testing {
 namespace {
@@ -119,9 +120,13 @@ TEST_F(HardeningTcpTest, ALargeMessagesMemoryIsGivenBackAfterItIsHandled) {
   request.GetReflection()->MutableUnknownFields(&request)->AddLengthDelimited(1000, std::string(60 * kMiB, 'x'));
   large->SendEnvelope(request);  // legal: an unknown field is ignored
   EXPECT_EQ(large->GetState().entities_size(), 2);
-  EXPECT_LT(returns_near_before(), before + 16 * kMiB) << "before: " << before << "; the client is still connected";
+  if (kRssBoundsHold) {
+    EXPECT_LT(returns_near_before(), before + 16 * kMiB) << "before: " << before << "; the client is still connected";
+  }
   large->Close();
-  EXPECT_LT(returns_near_before(), before + 16 * kMiB) << "before: " << before << "; the client left";
+  if (kRssBoundsHold) {
+    EXPECT_LT(returns_near_before(), before + 16 * kMiB) << "before: " << before << "; the client left";
+  }
 }
 
 // docs/reliability.md, finding 9: a 10-byte Configure{GetWorld} is answered with the whole
@@ -136,7 +141,9 @@ TEST_F(HardeningTcpTest, PipelinedGetWorldWithoutReadingStaysBounded) {
   request.mutable_configure()->mutable_get_world();
   const std::size_t peak = FloodWithoutReading(*flood, request, *healthy, 3000ms);
   std::cout << "RSS " << before / kMiB << " MiB before, at most " << peak / kMiB << " MiB during the flood\n";
-  EXPECT_LT(peak, before + 24 * kMiB) << "before: " << before;
+  if (kRssBoundsHold) {
+    EXPECT_LT(peak, before + 24 * kMiB) << "before: " << before;
+  }
   ExpectHeldBackOrClosedNamingTheLimit(*flood);
 }
 
@@ -152,7 +159,9 @@ TEST_F(HardeningTcpTest, PipelinedControlsRefusedBySimThreadWithoutReadingStayBo
   request.mutable_controls()->set_throttle(0.5f);
   const std::size_t peak = FloodWithoutReading(*flood, request, *healthy, 3000ms);
   std::cout << "RSS " << before / kMiB << " MiB before, at most " << peak / kMiB << " MiB during the flood\n";
-  EXPECT_LT(peak, before + 24 * kMiB) << "before: " << before;
+  if (kRssBoundsHold) {
+    EXPECT_LT(peak, before + 24 * kMiB) << "before: " << before;
+  }
   ExpectHeldBackOrClosedNamingTheLimit(*flood);
 }
 
