@@ -48,6 +48,20 @@ TEST_F(UdpReplyTest, FatalErrorFromTheSimThreadIsSentThenThePeerIsUnregistered) 
   }
 }
 
+TEST_F(UdpReplyTest, AStrayWelcomeAfterConnectIsDropped) {
+  // On a slow machine Connect repeats its Hello before the first Welcome comes
+  // back, and the daemon answers each: the second Welcome arrives after Connect.
+  proto::Envelope welcome;
+  welcome.mutable_welcome()->set_scene_name("default");
+  subscriber_.link->OfferReply(welcome);
+  subscriber_.link->OfferFrame(sim_.MakeFrame(1));
+  proto::Frame frame;
+  ASSERT_TRUE(client_.ReceiveFrame(frame, 5000ms));
+  EXPECT_EQ(frame.frame_id(), 1u);
+  proto::Envelope envelope;
+  EXPECT_FALSE(client_.ReceiveEnvelope(envelope, 200ms)) << "still queued: " << envelope.ShortDebugString();
+}
+
 TEST_F(UdpReplyTest, OfferingToAnExpiredClientIsHarmless) {
   // The client falls silent; its registration lapses.
   ASSERT_TRUE(sim_.WaitForDisconnect(subscriber_.client, std::chrono::milliseconds(10 * kExpiryMs)));

@@ -38,7 +38,8 @@ class UdpClient {
   // Opens the socket, sends Hello (again every `retry_interval()` until an
   // answer comes) and waits for Welcome. Throws ServerError if the daemon
   // refuses (e.g. VERSION_MISMATCH), ConnectionError if nothing answers
-  // within `timeout` or nothing listens on the port.
+  // within `timeout` or nothing listens on the port. A Welcome arriving after
+  // Connect returned (the answer to a repeated Hello) is dropped.
   void Connect(const std::string& host, uint16_t port, const std::string& client_name = "cpp-udp-client",
                Duration timeout = Duration(5000), uint32_t protocol_version = 0 /* 0: this build's */);
   // Opens the socket without the handshake (for tests that misbehave on purpose).

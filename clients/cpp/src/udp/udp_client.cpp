@@ -199,6 +199,8 @@ bool UdpClient::ReceiveKind(Envelope::KindCase kind, Envelope& out, Deadline dea
       return true;
     }
     if (scratch_.has_error()) ThrowServerError(scratch_.error());
+    // Only Connect asks for a Welcome; one arriving later answers a Hello it repeated.
+    if (scratch_.has_welcome()) continue;
     if (pending_.size() >= kMaxPending) pending_.pop_front();
     pending_.push_back(std::move(scratch_));
   }
