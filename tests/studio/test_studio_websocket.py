@@ -34,6 +34,34 @@ def test_static_files_and_clock(studio_daemon):
     assert status == 200 and int(body) > 0
 
 
+def test_http_1_0_closes_after_its_answer_unless_asked_to_keep_alive(studio_daemon):
+    """HTTP/1.0 means one request per connection unless the client sends
+    Connection: keep-alive; holding it open ties up a slot until the idle timeout."""
+    daemon = studio_daemon()
+
+    def ask(sock, connection_header):
+        sock.sendall(("GET /clock HTTP/1.0\r\nHost: 127.0.0.1\r\n%s\r\n" % connection_header).encode())
+        data = b""
+        while b"\r\n\r\n" not in data:
+            data += sock.recv(4096)
+        head = data.partition(b"\r\n\r\n")[0].decode("latin-1").lower()
+        assert head.startswith("http/1.") and " 200 " in head.split("\r\n")[0], head
+        return head
+
+    with socket.create_connection(("127.0.0.1", daemon.http), timeout=5.0) as sock:
+        head = ask(sock, "")
+        assert "connection: keep-alive" not in head, head
+        sock.settimeout(5.0)  # the idle timeout is 10 s: the close must come well before it
+        while True:
+            chunk = sock.recv(4096)  # the body, then the end of the stream
+            if not chunk:
+                break
+    with socket.create_connection(("127.0.0.1", daemon.http), timeout=5.0) as sock:
+        assert "connection: keep-alive" in ask(sock, "Connection: keep-alive\r\n")
+        time.sleep(0.2)  # the body has arrived; the connection must still take a second request
+        ask(sock, "Connection: keep-alive\r\n")
+
+
 def test_protocol_as_json_and_frames_as_two_messages(studio_daemon):
     daemon = studio_daemon("--map", MAP)
     ws = RawWebSocket(daemon.http, hello="json-test")

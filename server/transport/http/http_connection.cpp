@@ -118,6 +118,9 @@ void HttpConnection::OnRequest(const boost::system::error_code& error) {
 
   answered_ = true;
   Request request = parser_->release();
+  // Answered in the request's version, so an HTTP/1.0 client that asked to
+  // keep the connection is told it was kept (Connection: keep-alive).
+  response_version_ = request.version() == 10 ? 10 : 11;
   const std::string target(request.target());
   const std::string path = target.substr(0, target.find('?'));
   if (over_capacity_) {
@@ -183,7 +186,7 @@ void HttpConnection::Respond(http::status status, std::string body, const std::s
   keep_alive = keep_alive && !over_capacity_;
   response_ = {};
   response_.result(status);
-  response_.version(11);
+  response_.version(response_version_);
   response_.set(http::field::server, "sim4cvd");
   response_.set(http::field::content_type, content_type);
   response_.set(http::field::cache_control, "no-store");  // a restarted daemon's page must not be stale

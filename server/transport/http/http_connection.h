@@ -58,6 +58,7 @@ class HttpConnection : public HttpPeer, public std::enable_shared_from_this<Http
   bool handed_over_ = false;  // the socket is a WsSession's now
   bool answered_ = false;     // a whole request arrived (half_open until then)
   std::string set_cookie_;    // the studio's token cookie, sent with the next response
+  unsigned response_version_ = 11;  // the request's HTTP version: 10 or 11
 };
 
 }  // namespace sim4cv::transport
