@@ -45,8 +45,10 @@ start_daemon() {
   SHM=$(sed -n 's/.* shm=\([^ ]*\).*/\1/p' <<< "$line")
 }
 
+# OCTAVE_PRELOAD: libraries Octave alone needs preloaded (a sanitizer's runtime for an
+# instrumented MEX file; the shell and the daemon must not get them).
 run_octave() {
-  octave --no-gui --no-window-system --quiet --no-history \
+  LD_PRELOAD=${OCTAVE_PRELOAD:-${LD_PRELOAD:-}} octave --no-gui --no-window-system --quiet --no-history \
     --eval "addpath('$ROOT/clients/matlab', '$ROOT/clients/matlab/examples', '$MEX_DIR', '$ROOT/tests/octave'); $1"
 }
 

@@ -14,9 +14,9 @@ if(TARGET sim4cv_octave)
                  "LD_PRELOAD=${asan_runtime} ${ubsan_runtime};ASAN_OPTIONS=detect_leaks=0")
   endif()
   if(SIM4CV_TSAN)
-    # Likewise for ThreadSanitizer's runtime and the instrumented MEX file.
+    # Likewise for ThreadSanitizer's runtime, for Octave only (bash does not start with it preloaded).
     execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=libtsan.so OUTPUT_VARIABLE tsan_runtime
                     OUTPUT_STRIP_TRAILING_WHITESPACE)
-    set_property(TEST octave_client_test APPEND PROPERTY ENVIRONMENT "LD_PRELOAD=${tsan_runtime}")
+    set_property(TEST octave_client_test APPEND PROPERTY ENVIRONMENT "OCTAVE_PRELOAD=${tsan_runtime}")
   endif()
 endif()
