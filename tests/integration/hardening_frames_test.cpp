@@ -95,8 +95,10 @@ TEST_F(FramesHeldTest, LockstepClientsThatNeverReadHoldAFewFramesAndTheMemoryCom
   // The bound this computes to: every client's frames, the pool's spare and
   // 64 MiB for everything else (buffers, the allocator).
   const std::size_t bound = baseline + (kClients * kHeldPerClient + limits::kFramePoolSpare) * kFrameBytes + 64 * kMiB;
-  EXPECT_LE(peak, bound) << "RSS peaked at " << peak / kMiB << " MiB; baseline " << baseline / kMiB << " MiB, bound "
-                         << bound / kMiB << " MiB";
+  if (kRssBoundsHold) {
+    EXPECT_LE(peak, bound) << "RSS peaked at " << peak / kMiB << " MiB; baseline " << baseline / kMiB
+                           << " MiB, bound " << bound / kMiB << " MiB";
+  }
   std::cout << "[ numbers  ] baseline " << baseline / kMiB << " MiB, peak " << peak / kMiB << " MiB (bound "
             << bound / kMiB << " MiB), " << advanced << " frames advanced for 64 Steps\n";
 

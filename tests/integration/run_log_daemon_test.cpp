@@ -149,29 +149,15 @@ TEST(RunLogCrashTest, SigkillKeepsEveryFrameAClientReceived) {
   EXPECT_LT(log.ignored_bytes, 1000u) << "more than the record being written was lost";
 }
 
-// The daemon inherits the file size limit `bytes` (RLIMIT_FSIZE) at its
-// start; this process gets its own limit back at once.
-std::unique_ptr<DaemonProcess> StartWithFileSizeLimit(std::vector<std::string> args, rlim_t bytes) {
-  rlimit saved{};
-  getrlimit(RLIMIT_FSIZE, &saved);
-  rlimit limited = saved;
-  limited.rlim_cur = bytes;
-  if (setrlimit(RLIMIT_FSIZE, &limited) != 0) throw std::runtime_error("setrlimit failed");
-  std::unique_ptr<DaemonProcess> daemon;
-  try {
-    daemon = std::make_unique<DaemonProcess>(std::move(args));
-  } catch (...) {
-    setrlimit(RLIMIT_FSIZE, &saved);
-    throw;
-  }
-  setrlimit(RLIMIT_FSIZE, &saved);
-  return daemon;
-}
-
 TEST(RunLogDiskErrorTest, AFailedWriteStopsTheLogNotTheSimulation) {
   ScratchDir dir;
   const std::string path = dir / "full.s4log";
-  auto daemon = StartWithFileSizeLimit({"--log", path}, 16 << 10);  // ~50 records
+  auto daemon = std::make_unique<DaemonProcess>(std::vector<std::string>{"--log", path});
+  // The file size limit (RLIMIT_FSIZE) fails writes as a full disk does; set once the daemon
+  // runs (a lockstep daemon logs nothing before the first Step), since at its start it would
+  // also limit the sanitizer runtimes' own files.
+  rlimit limit{16 << 10, 16 << 10};  // ~50 records
+  ASSERT_EQ(::prlimit(daemon->pid(), RLIMIT_FSIZE, &limit, nullptr), 0);
   Client client;
   client.Connect("127.0.0.1", daemon->tcp_port(), "full disk");
   client.Subscribe("uav", {proto::CHANNEL_BOXES}, proto::DELIVERY_LOCKSTEP);
