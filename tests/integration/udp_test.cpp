@@ -74,7 +74,9 @@ TEST_F(UdpDaemonTest, MtuSizedDatagramsCarryWholeFrames) {
     EXPECT_EQ(frame.frame_id(), expected_id);
     ASSERT_EQ(frame.images_size(), static_cast<int>(channels::kPixelChannelCount));
     for (int i = 0; i < frame.images_size(); ++i) {
-      EXPECT_EQ(frame.images(i).data().size(), 320u * 180 * channels::kPixelChannels[i].bytes_per_pixel);
+      const channels::ChannelInfo* info = channels::Find(frame.images(i).channel());
+      ASSERT_NE(info, nullptr);
+      EXPECT_EQ(frame.images(i).data().size(), 320u * 180 * info->bytes_per_pixel) << info->name;
     }
   }
   const proto::Stats stats = udp->GetStats();
