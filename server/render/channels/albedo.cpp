@@ -3,8 +3,10 @@
 // In the full look it is the very material RGB lights (shading.h,
 // SurfaceAt: the procedural pattern per semantic class, the colour
 // variation, a wet ground's darkening); in the fast look (--quality fast)
-// the vertex colour that look shades. Gamma 2.2 in both, so linear albedo
-// is (value / 255)^2.2. Sky, and wherever nothing was hit: 0, 0, 0.
+// the vertex colour that look shades. Gamma 2 in both, a square root as the
+// full look's RGB (shading.h, Expose): pow(x, 1 / 2.2) doubled the channel's
+// cost on llvmpipe (docs/benchmarks.md). So linear albedo is (value / 255)^2.
+// Sky, and wherever nothing was hit: 0, 0, 0.
 #include "server/render/channel_output.h"
 #include "server/render/shading.h"
 
@@ -17,7 +19,7 @@ extern const ChannelOutput ALBEDO{proto::CHANNEL_ALBEDO, GL_RGBA8, GL_RGB, GL_UN
 #else
   vec3 albedo = v_color;
 #endif
-  OUT = vec4(pow(clamp(albedo, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+  OUT = vec4(sqrt(clamp(albedo, 0.0, 1.0)), 1.0);
 )", kShadingGlsl, /*reads_look=*/true};
 
 }  // namespace sim4cv::render::outputs
