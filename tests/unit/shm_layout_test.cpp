@@ -92,7 +92,7 @@ TEST(ShmLayout, SlotsHoldOnlyTheRingsChannels) {
   EXPECT_EQ(odd.offsets[kNormals], AlignUp(kShmFrameHeaderBytes + 17 * 19 * 3, kShmAlignment));
   EXPECT_EQ(odd.slot_bytes, AlignUp(odd.offsets[kNormals] + 17 * 19 * 12, 4096));
   EXPECT_EQ(channels::Names(kThree), "rgb,depth,mask");
-  EXPECT_EQ(channels::Names(channels::kAllPixels), "rgb,depth,mask,semantic,normals,flow");
+  EXPECT_EQ(channels::Names(channels::kAllPixels), "rgb,depth,mask,semantic,normals,flow,albedo");
 }
 
 TEST(ShmLayout, SocketPathIsAbstractAndBounded) {
