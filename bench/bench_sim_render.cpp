@@ -4,7 +4,8 @@
 //      trackers each flying its own UAV) at 240 Hz: the scene's World with
 //      three UAVs spawned, all following the car;
 //   3. frames rendered per second (RGB + depth + mask read back, boxes) from the UAV camera,
-//      then each further channel's added cost (protocol/channels.h), and RGB alone.
+//      then each further channel's added cost (protocol/channels.h), RGB alone, and each channel
+//      beside RGB alone.
 //   4. the cost of the look (look.h): rgb+depth+mask with --quality fast, then full without
 //      shadows, then full (the default), then full with sensor noise, in the conditions asked for.
 //   5. the cost of each camera effect (protocol/effects.h) on top of that look, and of all at once.
@@ -194,6 +195,13 @@ int main(int argc, char** argv) {
   }
   const bench::Summary rgb_only = timer.Run(channels::Bit(proto::CHANNEL_RGB));
   std::printf("render: rgb alone (no boxes) median %.3f ms\n", rgb_only.median);
+  // ... and each channel beside RGB alone: what a client asking for RGB and one more channel pays.
+  for (const channels::ChannelInfo& info : channels::kPixelChannels) {
+    if (info.id == proto::CHANNEL_RGB) continue;
+    const bench::Summary with = timer.Run(channels::Bit(proto::CHANNEL_RGB) | channels::Bit(info.id));
+    std::printf("render: rgb + %-8s median %.3f ms (%+.3f ms), p99 %.3f ms\n", std::string(info.name).c_str(),
+                with.median, with.median - rgb_only.median, with.p99);
+  }
 
   // What the look costs: the same frames in the flat look, and in the full look without shadows.
   render::Look fast = look;

@@ -28,7 +28,8 @@ namespace sim4cv::channels {
   X(MASK, "mask", INSTANCE_U16, U16, 1, "instance id of labelled objects; 0 elsewhere")                             \
   X(SEMANTIC, "semantic", SEMANTIC_U8, U8, 1, "semantic class per pixel, Cityscapes trainIds (protocol.md)")        \
   X(NORMALS, "normals", NORMAL_F32X3, F32, 3, "camera-space unit surface normal, OpenCV axes; 0,0,0 for sky")       \
-  X(FLOW, "flow", FLOW_F32X2, F32, 2, "optical flow from the camera's previous frame to this one, pixels")
+  X(FLOW, "flow", FLOW_F32X2, F32, 2, "optical flow from the camera's previous frame to this one, pixels")         \
+  X(ALBEDO, "albedo", RGB8, U8, 3, "surface colour before any light, gamma 2; 0,0,0 for sky")
 
 struct ChannelInfo {
   proto::Channel id;

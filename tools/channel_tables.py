@@ -60,9 +60,9 @@ def js_text(rows):
              "// tools/channel_tables.py; do not edit (the architecture test checks it is current).",
              "export const PIXEL_CHANNELS = ["]
     for enum, name, fmt, element, components, summary in rows:
-        lines.append("  { name: %s, channel: %s, element: %s, components: %d, summary: %s }," % (
-            json.dumps(name), json.dumps("CHANNEL_" + enum), json.dumps(element.lower()), components,
-            json.dumps(summary)))
+        lines.append("  { name: %s, channel: %s, format: %s, element: %s, components: %d, summary: %s }," % (
+            json.dumps(name), json.dumps("CHANNEL_" + enum), json.dumps("PIXEL_FORMAT_" + fmt),
+            json.dumps(element.lower()), components, json.dumps(summary)))
     lines.append("];")
     return "\n".join(lines) + "\n"
 

@@ -16,7 +16,8 @@ function f = sim4cv_frame(h, mode, timeout_ms)
 %   channel subscribed: rgb (HxWx3 uint8, imshow(f.rgb) shows it upright),
 %   depth (HxW single, metres along the optical axis, Inf for sky), mask
 %   (HxW uint16 object ids, 0 background), semantic (HxW uint8), normals
-%   (HxWx3 single), flow (HxWx2 single); boxes (Nx1 struct array with
+%   (HxWx3 single), flow (HxWx2 single), albedo (HxWx3 uint8, the surface
+%   colour before any light); boxes (Nx1 struct array with
 %   object_id, object_class, x, y, width, height, visibility,
 %   visible_pixels; 0x1 if none) and intrinsics (fx, fy, cx, cy; [] without
 %   'boxes'). Box x, y are 0-based pixel coordinates as on the wire: the

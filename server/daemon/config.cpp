@@ -175,6 +175,7 @@ Usage: sim4cvd [flags]
 )" + ChannelHelp() +
          R"(  --conditions PRESET       weather and time of day of the RGB images: )" + conditions::Names() + R"(
                             (default clear_noon; docs/protocol.md, "Conditions"). Only RGB changes
+                            (and albedo where rain wets the ground)
   --hour H                  local solar time in [0, 24] (default: the preset's own hour)
   --quality Q               full (sky, sun shadows, procedural materials) or fast (flat shading, the
                             cheapest; default full)

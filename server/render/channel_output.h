@@ -31,6 +31,10 @@ struct ChannelOutput {
   // GLSL declared before main() when this channel is drawn (functions and
   // their uniforms, e.g. shading.h); null: none.
   const char* glsl_functions = nullptr;
+  // Its GLSL has a full-look variant (#ifdef SIM4CV_FULL_LOOK) reading the
+  // look's uniforms (shading.h): with the full look it is drawn by the
+  // full look's programs whether or not RGB is drawn beside it.
+  bool reads_look = false;
 };
 
 // One per entry of channels::kPixelChannels, in that order.

@@ -1,5 +1,7 @@
 #include "server/render/channel_program.h"
 
+#include <algorithm>
+#include <array>
 #include <string>
 
 #include "server/render/gl_program.h"
@@ -66,10 +68,13 @@ std::string FragmentShader(PlaneSet planes, uint32_t look) {
   if (look & ChannelProgram::kFull) declarations.insert(after_version, "#define SIM4CV_FULL_LOOK\n");
   if (look & ChannelProgram::kFlatGround) declarations.insert(after_version, "#define SIM4CV_FLAT_GROUND\n");
   std::string body = "void main() {\n";
+  std::array<const char*, channels::kPixelChannelCount> declared{};  // functions shared by channels (shading.h) once
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
     if ((planes & (1u << i)) == 0) continue;
     const ChannelOutput& output = *kChannelOutputs[i];
-    if (output.glsl_functions != nullptr) declarations += output.glsl_functions;
+    const bool functions_new = std::find(declared.begin(), declared.end(), output.glsl_functions) == declared.end();
+    if (output.glsl_functions != nullptr && functions_new) declarations += output.glsl_functions;
+    declared[i] = output.glsl_functions;
     const std::string name = "out_" + std::string(channels::kPixelChannels[i].name);
     declarations += "layout(location = " + std::to_string(i) + ") out " + output.glsl_type + " " + name + ";\n";
     body += "#define OUT " + name + "\n  {" + output.glsl_body + "  }\n#undef OUT\n";

@@ -36,7 +36,7 @@ class ChannelProgram {
   // set (glUniform* ignores -1).
   GLint u_model = -1, u_view = -1, u_projection = -1, u_normal_matrix = -1, u_instance = -1, u_to_light = -1;
   GLint u_previous_model = -1, u_previous_view_projection = -1, u_viewport = -1;
-  LookUniforms look;  // those of shading.h, where a channel (RGB) uses them
+  LookUniforms look;  // those of shading.h, where a channel (RGB, albedo) uses them
   GLint u_lamps = -1, u_lamp_count = -1, u_headlights = -1, u_headlight_directions = -1, u_headlight_count = -1;
 
  private:

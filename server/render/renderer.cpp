@@ -48,6 +48,15 @@ bool FlatGround(uint32_t semantic) {
 constexpr std::size_t kRgbPlane = *channels::IndexOf(proto::CHANNEL_RGB);
 constexpr std::size_t kMaskPlane = *channels::IndexOf(proto::CHANNEL_MASK);
 
+// The planes drawn by the full look's programs when the look is full (ChannelOutput::reads_look).
+PlaneSet LookPlanes() {
+  PlaneSet planes = 0;
+  for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {
+    if (kChannelOutputs[i]->reads_look) planes |= 1u << i;
+  }
+  return planes;
+}
+
 struct MeshRange {
   GLsizei index_count = 0;
   size_t first_index = 0;
@@ -94,6 +103,7 @@ struct Renderer::Impl {
   uint32_t max_width = 0;
   uint32_t max_height = 0;
   std::vector<MeshRange> meshes;
+  const PlaneSet look_planes = LookPlanes();
 
   // Built the first time a set of channels is drawn in a look: index = plane
   // bits + kPlaneSets * RgbLook.
@@ -326,7 +336,7 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
   const Eigen::Vector3f to_light = look.full ? look.to_sun : Eigen::Vector3f(-0.4f, 0.3f, 0.85f).normalized();
   const Eigen::Vector2f viewport(static_cast<float>(scale * camera.width), static_cast<float>(scale * camera.height));
   const Eigen::Vector3f camera_position = camera.world_from_camera.block<3, 1>(0, 3);
-  const bool full_rgb = (rgb_look & ChannelProgram::kFull) != 0;
+  const bool full_look = (rgb_look & ChannelProgram::kFull) != 0;
   SetLodCamera(camera);
 
   glViewport(0, 0, static_cast<GLsizei>(viewport.x()), static_cast<GLsizei>(viewport.y()));
@@ -356,7 +366,7 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
     glUniformMatrix4fv(program->u_previous_view_projection, 1, GL_FALSE, previous_view_projection.data());
     glUniform3fv(program->u_to_light, 1, to_light.data());
     glUniform2fv(program->u_viewport, 1, viewport.data());
-    if (full_rgb) program->look.Apply(look, camera_position, pass.shadow, camera.noise_seed);
+    if (full_look) program->look.Apply(look, camera_position, pass.shadow, camera.noise_seed);
     if ((program_look & ChannelProgram::kLamps) != 0) {
       glUniform3fv(program->u_lamps, lamp_count, nearest_lamps[0].data());
       glUniform1i(program->u_lamp_count, lamp_count);
@@ -368,10 +378,10 @@ void Renderer::Impl::DrawPass(const Pass& pass, std::span<const DrawItem> items,
   use(rgb_look);
   // The full look draws flat ground (last) with its own, shorter program.
   const auto before_ground = [&] {
-    if (full_rgb) use(rgb_look | ChannelProgram::kFlatGround);
+    if (full_look) use(rgb_look | ChannelProgram::kFlatGround);
   };
   DrawScene(items, FrustumPlanes(pass.projection * pass.view), unoccluded_pixels, before_ground);
-  if (full_rgb) {
+  if (full_look && (planes & (1u << kRgbPlane)) != 0) {
     if (!sky) sky = std::make_unique<SkyPass>();
     sky->Draw(static_cast<GLuint>(kRgbPlane), top_row_first * pass.view, camera_position, look, camera.noise_seed);
   }
@@ -540,7 +550,9 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   const PlaneSet planes = ((wanted | inputs) & ~fine_planes) | (rescale ? 1u << kMaskPlane : 0u);
   if (through != 0 && !gl.effects) gl.effects = std::make_unique<EffectsPass>(gl.max_width, gl.max_height);
   const float widening = lens ? gl.effects->Prepare(camera) : 1.0f;
+  // The light (shadows, noise, lamps) is RGB's alone; the full look's materials are every look plane's.
   const bool full_rgb = gl.look.full && (planes & (1u << kRgbPlane)) != 0;
+  const auto full_look = [&](PlaneSet drawn) { return gl.look.full && (drawn & gl.look_planes) != 0; };
   glBindVertexArray(gl.vertex_array);
   ShadowSampling shadow;
   if (full_rgb && gl.look.shadows) shadow = gl.DrawShadows(camera, items);
@@ -549,16 +561,17 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
       Perspective(lens ? WidenedFov(camera.fov_y_deg, widening) : camera.fov_y_deg,
                   static_cast<float>(camera.width) / static_cast<float>(camera.height), camera.near_m, camera.far_m),
       shadow};
-  uint32_t rgb_look = ChannelProgram::kFast;
+  uint32_t rgb_look = full_look(planes) ? ChannelProgram::kFull : ChannelProgram::kFast;
   if (full_rgb) {
-    rgb_look = ChannelProgram::kFull | (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
-               (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u) |
-               (gl.look.lights > 0.0f && !(gl.lamps.empty() && gl.headlights.empty()) ? ChannelProgram::kLamps : 0u);
+    rgb_look |= (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
+                (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u) |
+                (gl.look.lights > 0.0f && !(gl.lamps.empty() && gl.headlights.empty()) ? ChannelProgram::kLamps : 0u);
   }
   constexpr uint32_t kFineScale = 2;
   if (fine_planes != 0) {
     if (!gl.fine) gl.fine = std::make_unique<RenderTargets>(kFineScale * gl.max_width, kFineScale * gl.max_height);
-    gl.DrawPass(pass, items, *gl.fine, kFineScale, fine_planes, ChannelProgram::kFast, {});
+    gl.DrawPass(pass, items, *gl.fine, kFineScale, fine_planes,
+                full_look(fine_planes) ? ChannelProgram::kFull : ChannelProgram::kFast, {});
   }
   // Last, so the counting pass below finds this pass's stencil, program and viewport.
   if (planes != 0) {

@@ -1,4 +1,4 @@
-// GLSL shared by the RGB channel and the sky pass: the look's uniforms,
+// GLSL shared by the RGB and albedo channels and the sky pass: the look's uniforms,
 // value noise, the sky, procedural materials per semantic class, sun
 // shadows and the camera's response. Every pattern is a function of the
 // world position and the class only (no textures, no time, no randomness),
@@ -216,15 +216,20 @@ Surface Material(uint c, vec3 base, vec3 p, vec3 n, float distance) {
   return s;
 }
 
+// The surface at world point p with unit normal n, before any light: the
+// material RGB lights, and all the albedo channel shows.
+Surface SurfaceAt(vec3 base, vec3 n, vec3 p, uint semantic) {
+  return Material(semantic, Vary(base, semantic), p, n, length(u_camera_position - p));
+}
+
 // fog: 0 (none) .. 1 (only fog), interpolated from the vertices (the
 // vertex shader's v_fog: exp(-density * distance) is smooth enough).
 vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic_and_flags, float fog) {
   uint semantic = semantic_and_flags & 255u;
   vec3 n = normalize(world_normal);
   vec3 to_eye_full = u_camera_position - p;
-  float distance = length(to_eye_full);
-  vec3 to_eye = to_eye_full / distance;
-  Surface s = Material(semantic, Vary(base, semantic), p, n, distance);
+  vec3 to_eye = to_eye_full / length(to_eye_full);
+  Surface s = SurfaceAt(base, n, p, semantic);
   float direct = max(dot(n, u_to_light), 0.0) * SunVisibility(p, n);
   vec3 ambient = mix(u_ambient_ground, u_ambient_sky, 0.5 + 0.5 * n.z);
   vec3 half_way = normalize(u_to_light + to_eye);

@@ -1,4 +1,4 @@
-// An Image's bytes as RGBA for a canvas: RGB as sent, ground truth
+// An Image's bytes as RGBA for a canvas: RGB8 channels as sent, ground truth
 // colourised with the Python client's colour maps (clients/python/sim4cv/
 // visualize.py): depth grey levels (near bright, sky black), instance ids
 // as in clients/cpp/examples/channel_colours.cpp, semantic classes in the
@@ -35,7 +35,8 @@ function typed(Type, bytes) {
 // Fills `out` (Uint8ClampedArray, width*height*4) from a raw image of `channel`.
 export function toRgba(channel, bytes, out) {
   const n = out.length / 4;
-  if (channel === "CHANNEL_RGB") {
+  const info = PIXEL_CHANNELS.find((c) => c.channel === channel);
+  if (info?.format === "PIXEL_FORMAT_RGB8") {  // RGB, albedo: colour as sent
     for (let i = 0; i < n; ++i) {
       out[4 * i] = bytes[3 * i];
       out[4 * i + 1] = bytes[3 * i + 1];
@@ -83,7 +84,7 @@ export function toRgba(channel, bytes, out) {
   } else if (channel === "CHANNEL_FLOW") {
     flowToRgba(typed(Float32Array, bytes), out, n);
   } else {
-    greyToRgba(PIXEL_CHANNELS.find((c) => c.channel === channel), bytes, out, n);
+    greyToRgba(info, bytes, out, n);
   }
 }
 

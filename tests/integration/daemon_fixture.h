@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "protocol/channels.h"
 #include "sim4cv/client.h"
 #include "tests/support/daemon_process.h"
 
@@ -21,9 +22,11 @@ inline std::string SourcePath(const std::string& relative) {
 
 // Every channel, so the transport, determinism and replay tests cover each
 // pixel channel of protocol/channels.h.
-inline const std::vector<proto::Channel> kAllChannels = {
-    proto::CHANNEL_RGB,      proto::CHANNEL_DEPTH,   proto::CHANNEL_MASK, proto::CHANNEL_BOXES,
-    proto::CHANNEL_SEMANTIC, proto::CHANNEL_NORMALS, proto::CHANNEL_FLOW};
+inline const std::vector<proto::Channel> kAllChannels = [] {
+  std::vector<proto::Channel> all = {proto::CHANNEL_BOXES};
+  for (const channels::ChannelInfo& info : channels::kPixelChannels) all.push_back(info.id);
+  return all;
+}();
 
 // A fresh daemon per test; its stderr is printed if the test fails, and a
 // test fails if the daemon did not exit 0 on SIGTERM.

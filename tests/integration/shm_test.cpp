@@ -178,24 +178,16 @@ TEST_F(ShmDaemonTest, FramesAreByteIdenticalToTcpFrames) {
   });
 }
 
-// A ring carrying every channel: semantic, normals and flow reach a shm
-// client byte for byte as TCP sends them.
+// A ring carrying every channel of protocol/channels.h: each reaches a shm
+// client byte for byte as TCP sends it.
 TEST_F(ShmDaemonTest, EveryChannelIsByteIdenticalToTcp) {
-  StartShmDaemon({"--shm-channels", "rgb,depth,mask,semantic,normals,flow"});
+  StartShmDaemon({"--shm-channels", channels::Names(channels::kAllPixels)});
   auto tcp = Connect("tcp-lockstep");
   auto shm = OpenShm();
-  const std::vector<proto::Channel> every{proto::CHANNEL_RGB,      proto::CHANNEL_DEPTH,   proto::CHANNEL_MASK,
-                                          proto::CHANNEL_SEMANTIC, proto::CHANNEL_NORMALS, proto::CHANNEL_FLOW,
-                                          proto::CHANNEL_BOXES};
-  CompareWithTcp(
-      *tcp, *shm, 3,
-      [](const OwnedFrame& owned, const proto::Frame& frame) {
-        for (const auto channel : {proto::CHANNEL_DEPTH, proto::CHANNEL_MASK, proto::CHANNEL_SEMANTIC,
-                                   proto::CHANNEL_NORMALS, proto::CHANNEL_FLOW}) {
-          ExpectSamePlane(owned, frame, channel);
-        }
-      },
-      every);
+  EXPECT_EQ(shm->header().channel_mask, channels::kAllPixels);
+  CompareWithTcp(*tcp, *shm, 3, [](const OwnedFrame& owned, const proto::Frame& frame) {
+    for (const channels::ChannelInfo& info : channels::kPixelChannels) ExpectSamePlane(owned, frame, info.id);
+  });
 }
 
 // --shm-channels rgb: the same RGB bytes as TCP sends, depth and mask absent

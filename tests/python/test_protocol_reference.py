@@ -35,9 +35,9 @@ def test_layout_version_rows_match_shm_layout(text):
 
 
 def test_channel_masks_match_shm_layout(text):
-    all_six = "`%#04x`" % L.ALL_PIXELS_MASK
-    assert all_six in re.search(r"no bits but those of\s+(`0x[0-9a-f]+`)", text).group(1)
-    assert "%s for all six" % all_six in text
+    every = "`%#04x`" % L.ALL_PIXELS_MASK
+    assert every in re.search(r"no bits but those of\s+(`0x[0-9a-f]+`)", text).group(1)
+    assert "%s for all pixel channels" % every in text
     default = sum(1 << c for c in (pb.CHANNEL_RGB, pb.CHANNEL_DEPTH, pb.CHANNEL_MASK))
     assert "`%#04x` (RGB, DEPTH, MASK) by default" % default in text
 

@@ -20,6 +20,7 @@ struct RenderedFrame {
   std::vector<uint8_t> semantic;  // 1 per pixel
   std::vector<float> normals;     // 3 per pixel
   std::vector<float> flow;        // 2 per pixel
+  std::vector<uint8_t> albedo;    // 3 per pixel
 
   RenderedFrame(uint32_t w, uint32_t h)
       : width(w),
@@ -29,7 +30,8 @@ struct RenderedFrame {
         mask(size_t{w} * h),
         semantic(size_t{w} * h),
         normals(size_t{w} * h * 3),
-        flow(size_t{w} * h * 2) {}
+        flow(size_t{w} * h * 2),
+        albedo(size_t{w} * h * 3) {}
 
   // The buffers of the channels in `set` (RGB, depth and mask by default).
   render::FrameBuffers Buffers(channels::ChannelSet set = channels::Bit(proto::CHANNEL_RGB) |
@@ -45,6 +47,7 @@ struct RenderedFrame {
     put(proto::CHANNEL_SEMANTIC, semantic.data());
     put(proto::CHANNEL_NORMALS, normals.data());
     put(proto::CHANNEL_FLOW, flow.data());
+    put(proto::CHANNEL_ALBEDO, albedo.data());
     return buffers;
   }
   size_t At(uint32_t x, uint32_t y) const { return size_t{y} * width + x; }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -11,6 +12,7 @@
 #include <variant>
 #include <vector>
 
+#include "protocol/channels.h"
 #include "protocol/framing.h"
 #include "server/common/limits.h"
 #include "tests/support/no_warnings.h"
@@ -241,12 +243,21 @@ TEST_F(ClientProtocolTest, EmptyChannelsAreRefused) {
 
 TEST_F(ClientProtocolTest, OutOfRangeChannelsAreRefused) {
   Handshake();
-  ExpectError(Send(Subscribe("uav", {0})), proto::ERROR_CODE_INVALID_ARGUMENT, false,
-              {"Subscribe.channels holds 0", "which is no channel this daemon serves",
-               "valid channels are 1 (RGB), 2 (DEPTH), 3 (MASK), 5 (SEMANTIC), 6 (NORMALS), 7 (FLOW), and 4 (BOXES)"});
+  // The message lists every channel of the table by number and name, then BOXES.
+  std::vector<std::string> parts = {
+      "Subscribe.channels holds 0", "which is no channel this daemon serves",
+      "valid channels are 1 (RGB), 2 (DEPTH), 3 (MASK), 5 (SEMANTIC), 6 (NORMALS), 7 (FLOW), ", "), and 4 (BOXES)"};
+  for (const channels::ChannelInfo& info : channels::kPixelChannels) {
+    std::string name(info.name);
+    for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    parts.push_back(std::to_string(info.id) + " (" + name + "), ");
+  }
+  ExpectError(Send(Subscribe("uav", {0})), proto::ERROR_CODE_INVALID_ARGUMENT, false, parts);
   ExpectError(Send(Subscribe("uav", {proto::CHANNEL_RGB, 99})), proto::ERROR_CODE_INVALID_ARGUMENT, false,
               {"holds 99"});
-  ExpectError(Send(Subscribe("uav", {8})), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"holds 8"});
+  const int past_the_table = proto::Channel_ARRAYSIZE;  // one past the proto's largest Channel value
+  ExpectError(Send(Subscribe("uav", {past_the_table})), proto::ERROR_CODE_INVALID_ARGUMENT, false,
+              {"holds " + std::to_string(past_the_table)});
   ExpectError(Send(Subscribe("uav", {-1})), proto::ERROR_CODE_INVALID_ARGUMENT, false, {"holds -1"});
 }
 
@@ -675,7 +686,8 @@ TEST_F(ClientProtocolTest, OverlongCameraNameIsRefusedWithASmallError) {
 TEST_F(ClientProtocolTest, MoreChannelsThanThereAreIsRefusedBeforeLooking) {
   Handshake();
   ExpectError(Send(Subscribe("uav", std::vector<int>(100000, proto::CHANNEL_RGB))), proto::ERROR_CODE_INVALID_ARGUMENT,
-              false, {"Subscribe.channels has 100000 entries", "at most 7"});
+              false,
+              {"Subscribe.channels has 100000 entries", "at most " + std::to_string(channels::kSubscribableCount)});
 }
 
 proto::Envelope GetWorldRequest(uint32_t request_id) {

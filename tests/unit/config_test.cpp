@@ -318,9 +318,9 @@ TEST(ConfigTest, ShmChannels) {
             (1u << proto::CHANNEL_RGB) | (1u << proto::CHANNEL_MASK));
   EXPECT_EQ(Parse({"--shm-channels", "depth"}).shm_channel_mask, 1u << proto::CHANNEL_DEPTH);
   // Each refusal names the flag, the value and what is wrong with it.
-  ExpectMentions(
-      ParseError({"--shm-channels", "rgb,boxes"}),
-      {"--shm-channels is 'rgb,boxes'", "'boxes' is not a channel", "use rgb,depth,mask,semantic,normals,flow"});
+  ExpectMentions(ParseError({"--shm-channels", "rgb,boxes"}),
+                 {"--shm-channels is 'rgb,boxes'", "'boxes' is not a channel",
+                  "use rgb,depth,mask,semantic,normals,flow", "use " + channels::Names(channels::kAllPixels)});
   ExpectMentions(ParseError({"--shm-channels", "RGB"}), {"--shm-channels is 'RGB'", "'RGB' is not a channel"});
   ExpectMentions(ParseError({"--shm-channels", "rgb, depth"}), {"--shm-channels", "' depth' is not a channel"});
   ExpectMentions(ParseError({"--shm-channels", ""}), {"--shm-channels is ''", "'' is not a channel"});

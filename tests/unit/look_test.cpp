@@ -207,6 +207,43 @@ TEST_F(LookRenderTest, EveryPresetRendersTheSameRgbEveryTime) {
   }
 }
 
+// Albedo is the material the full look lights, before any light: the same
+// bytes under every preset's sun, sky, fog and night lights; rain darkens
+// only the wet ground (road, sidewalk, terrain, markings). Drawn without RGB
+// beside it, it is the same too (the full look's programs draw it either way).
+TEST_F(LookRenderTest, AlbedoIsTheSameUnderEveryLight) {
+  const Shot noon = Render(0, conditions::Of(Preset::CLEAR_NOON));
+  const auto wet_ground = [](uint8_t semantic) {
+    return semantic <= 1 || semantic == 9 || semantic == 19 || semantic == 20;
+  };
+  for (const conditions::PresetInfo& info : conditions::kPresets) {
+    SCOPED_TRACE(info.name);
+    const Shot shot = Render(0, conditions::Of(info.preset));
+    EXPECT_FALSE(info.preset != Preset::CLEAR_NOON && SameBytes(shot.frame.rgb, noon.frame.rgb)) << "RGB is lit anew";
+    if (info.preset != Preset::RAIN) {
+      EXPECT_TRUE(SameBytes(shot.frame.albedo, noon.frame.albedo));
+      continue;
+    }
+    std::size_t darker = 0, ground = 0;
+    for (std::size_t i = 0; i < noon.frame.semantic.size(); ++i) {
+      for (std::size_t c = 3 * i; c < 3 * i + 3; ++c) {
+        if (wet_ground(noon.frame.semantic[i])) {
+          ASSERT_LE(shot.frame.albedo[c], noon.frame.albedo[c]) << "pixel " << i;
+        } else {
+          ASSERT_EQ(shot.frame.albedo[c], noon.frame.albedo[c]) << "pixel " << i;
+        }
+      }
+      ground += wet_ground(noon.frame.semantic[i]) ? 1 : 0;
+      darker += shot.frame.albedo[3 * i] < noon.frame.albedo[3 * i] ? 1 : 0;
+    }
+    EXPECT_GT(darker, ground / 2) << "most wet ground is darker";
+  }
+  testing::RenderedFrame alone(kWidth, kHeight);
+  renderer_->SetLook(LookOf(conditions::Of(Preset::CLEAR_NOON)));
+  renderer_->Render(View(0), graphics_->draw_items(), alone.Buffers(channels::Bit(proto::CHANNEL_ALBEDO)), {});
+  EXPECT_TRUE(SameBytes(alone.albedo, noon.frame.albedo));
+}
+
 // The fixed casters' shadow depth is drawn once and reused while the map
 // stays put: a moving car's shadow must still follow it, exactly as a
 // renderer that never drew anything before would draw it.

@@ -29,7 +29,7 @@ static_assert(offsetof(ShmHeader, magic) == 0 && offsetof(ShmHeader, layout_vers
 static_assert(offsetof(ShmHeader, slot_count) == 24 && offsetof(ShmHeader, slot_bytes) == 32);
 static_assert(offsetof(ShmHeader, camera_width) == 48 && offsetof(ShmHeader, writer_pid) == 56);
 static_assert(offsetof(ShmHeader, expiry_ms) == 136 && offsetof(ShmHeader, protocol_version) == 140);
-static_assert(offsetof(ShmHeader, channel_mask) == 152 && channels::kAllPixels == 0xee);
+static_assert(offsetof(ShmHeader, channel_mask) == 152 && channels::kAllPixels == 0x1ee);
 static_assert(offsetof(ShmHeader, newest_frame_id) == 200 && offsetof(ShmHeader, closed) == 216);
 static_assert(offsetof(ShmFrameHeader, publication) == 8 && offsetof(ShmFrameHeader, frame_id) == 16);
 static_assert(offsetof(ShmFrameHeader, render_end_mono_ns) == 32 && offsetof(ShmFrameHeader, channel_mask) == 48);
@@ -63,10 +63,10 @@ TEST(ShmLayout, GeometryAlignsSlotsAndPlanes) {
     EXPECT_EQ(g.slots_offset, 4096u);
     EXPECT_EQ(g.total_bytes, g.slots_offset + 8 * g.slot_bytes);
   }
-  // The figures docs/protocol.md quotes: the default --shm-channels, and all six.
+  // The figures docs/protocol.md quotes: the default --shm-channels, and all seven.
   EXPECT_EQ(ComputeGeometry(320, 180, 8, kThree).slot_bytes, 528384u);
   EXPECT_EQ(ComputeGeometry(320, 180, 8, kThree).total_bytes, 4231168u);
-  EXPECT_EQ(ComputeGeometry(320, 180, 8).slot_bytes, 1736704u);
+  EXPECT_EQ(ComputeGeometry(320, 180, 8).slot_bytes, 1912832u);
   EXPECT_EQ(kAreaRequestOffset, 256u);
   EXPECT_EQ(kAreaResponseOffset, 16640u);
   EXPECT_EQ(kAreaBytes, 36864u);
@@ -92,7 +92,7 @@ TEST(ShmLayout, SlotsHoldOnlyTheRingsChannels) {
   EXPECT_EQ(odd.offsets[kNormals], AlignUp(kShmFrameHeaderBytes + 17 * 19 * 3, kShmAlignment));
   EXPECT_EQ(odd.slot_bytes, AlignUp(odd.offsets[kNormals] + 17 * 19 * 12, 4096));
   EXPECT_EQ(channels::Names(kThree), "rgb,depth,mask");
-  EXPECT_EQ(channels::Names(channels::kAllPixels), "rgb,depth,mask,semantic,normals,flow");
+  EXPECT_EQ(channels::Names(channels::kAllPixels), "rgb,depth,mask,semantic,normals,flow,albedo");
 }
 
 TEST(ShmLayout, SocketPathIsAbstractAndBounded) {

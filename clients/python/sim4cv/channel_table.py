@@ -10,4 +10,5 @@ PIXEL_CHANNELS = (
     ("semantic", "CHANNEL_SEMANTIC", "PIXEL_FORMAT_SEMANTIC_U8", "u8", 1, 1, "semantic class per pixel, Cityscapes trainIds (protocol.md)"),
     ("normals", "CHANNEL_NORMALS", "PIXEL_FORMAT_NORMAL_F32X3", "f32", 3, 12, "camera-space unit surface normal, OpenCV axes; 0,0,0 for sky"),
     ("flow", "CHANNEL_FLOW", "PIXEL_FORMAT_FLOW_F32X2", "f32", 2, 8, "optical flow from the camera's previous frame to this one, pixels"),
+    ("albedo", "CHANNEL_ALBEDO", "PIXEL_FORMAT_RGB8", "u8", 3, 3, "surface colour before any light, gamma 2; 0,0,0 for sky"),
 )

@@ -20,6 +20,6 @@ extern const ChannelOutput RGB{proto::CHANNEL_RGB, GL_RGBA8, GL_RGB, GL_UNSIGNED
   vec3 linear_rgb = v_color * (kAmbient + (1.0 - kAmbient) * lambert);
   OUT = vec4(pow(linear_rgb, vec3(1.0 / 2.2)), 1.0);
 #endif
-)", kShadingGlsl};
+)", kShadingGlsl, /*reads_look=*/true};
 
 }  // namespace sim4cv::render::outputs
