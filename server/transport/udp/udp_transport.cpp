@@ -414,6 +414,8 @@ class UdpTransport : public Transport {
         continue;
       }
       counters_.Add(UdpCounter::kExpired);
+      // Counted before the sim thread hears of it: stats read after the lockstep moves on include it.
+      counters_.Flush(context_->counters);
       LOG_INFO("client " << peer.client() << " ('" << peer.protocol().client_name() << "') over UDP from "
                          << peer.address().ToString() << " expired after " << options_.expiry_ms << " ms of silence");
       peer.Close(true);
