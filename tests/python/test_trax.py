@@ -277,6 +277,10 @@ def test_other_output_is_ignored():
     with bad("--chatter") as t:
         t.init(small(), (1, 2, 3, 4))
         assert t.update(small()) == (10, 20, 30, 40)
+        # stderr has its own reader thread: the line may land a moment after the state on stdout.
+        deadline = time.monotonic() + 30
+        while "tracker stderr: working" not in t.stderr_tail and time.monotonic() < deadline:
+            time.sleep(0.01)
         assert "tracker stderr: working" in t.stderr_tail
 
 
