@@ -7,7 +7,8 @@
 #                                     time, logs in build-fuzz/logs/; fails on any finding
 #                                     (FUZZ_MAX_SECONDS=S: at most S seconds per target)
 #   bash scripts/fuzz.sh seeds        rewrite the seed corpora in fuzz/corpus from real messages
-#   bash scripts/fuzz.sh merge        minimize fuzz/corpus with what the runs found (-set_cover_merge=1)
+#   bash scripts/fuzz.sh merge        add to fuzz/corpus what the runs found (-set_cover_merge=1), keeping
+#                                     every named seed and 512 KB per target (FUZZ_CORPUS_BUDGET_BYTES)
 # Targets: all by default, or name some in FUZZ_TARGETS="fuzz_map fuzz_runlog".
 # A finding is written to build-fuzz/findings/<target>/; replay it with build-fuzz/fuzz/<target> FILE.
 set -euo pipefail
@@ -103,17 +104,51 @@ record_log() {
   wait $pid
 }
 
+# What merge commits per target: the named seeds, then what the runs found
+# that adds coverage, within a byte budget (8 targets x 512 KB = 4 MB in all),
+# so the repository does not grow with every session's runs.
+CORPUS_BUDGET_BYTES=${FUZZ_CORPUS_BUDGET_BYTES:-524288}
+
+# Files libFuzzer named by their SHA-1; every other name is a seed someone chose
+# (hand-written, written by sim4cv_fuzz_seeds, or a finding's reproducer).
+is_hash_name() { [[ $(basename "$1") =~ ^[0-9a-f]{40}$ ]]; }
+
+# The named seeds go into the merge's output folder first: -set_cover_merge=1
+# keeps what that folder holds and adds from the committed corpus and the run's
+# scratch corpus only inputs that cover something the folder does not.
 merge() {
   for target in $TARGETS; do
-    local merged="$BUILD_DIR/merged/$target"
-    rm -rf "$merged"
-    mkdir -p "$merged"
+    local corpus="fuzz/corpus/$target" merged="$BUILD_DIR/merged/$target" picked="$BUILD_DIR/merged/$target.picked"
+    rm -rf "$merged" "$picked"
+    mkdir -p "$merged" "$picked" "$BUILD_DIR/logs" "$BUILD_DIR/scratch/$target"
+    local file
+    for file in "$corpus"/*; do is_hash_name "$file" || cp "$file" "$merged/"; done
     # shellcheck disable=SC2046
-    "$BUILD_DIR/fuzz/$target" $(flags "$target") -set_cover_merge=1 "$merged" "fuzz/corpus/$target" \
-      "$BUILD_DIR/scratch/$target" > "$BUILD_DIR/logs/$target.merge.log" 2>&1
-    rm -rf "fuzz/corpus/$target"
-    cp -r "$merged" "fuzz/corpus/$target"
-    echo "fuzz: $target corpus: $(find "fuzz/corpus/$target" -type f | wc -l) files, $(du -sk "fuzz/corpus/$target" | cut -f1) KB"
+    if ! "$BUILD_DIR/fuzz/$target" $(flags "$target") -set_cover_merge=1 "$merged" "$corpus" \
+        "$BUILD_DIR/scratch/$target" > "$BUILD_DIR/logs/$target.merge.log" 2>&1; then
+      echo "fuzz: $target merge FAILED (log: $BUILD_DIR/logs/$target.merge.log); $corpus unchanged"
+      return 1
+    fi
+    # The named seeds whole, then the found inputs smallest first while the budget lasts.
+    local used=0 left_out=0 size
+    for file in "$merged"/*; do
+      is_hash_name "$file" && continue
+      cp "$file" "$picked/"
+      used=$((used + $(stat -c %s "$file")))
+    done
+    while read -r size file; do
+      if ((used + size > CORPUS_BUDGET_BYTES)); then
+        left_out=$((left_out + 1))
+        continue
+      fi
+      cp "$file" "$picked/"
+      used=$((used + size))
+    done < <(find "$merged" -maxdepth 1 -type f -regextype posix-extended -regex '.*/[0-9a-f]{40}' \
+               -printf '%s %p\n' | sort -n)
+    rm -rf "$corpus"
+    mv "$picked" "$corpus"
+    echo "fuzz: $target corpus: $(find "$corpus" -type f | wc -l) files, $((used / 1024)) KB" \
+      "(budget $((CORPUS_BUDGET_BYTES / 1024)) KB; $left_out found inputs over it left out)"
   done
 }
 

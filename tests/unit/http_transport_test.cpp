@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "server/transport/http/http_connection.h"
 #include "server/transport/http/json_envelope.h"
@@ -44,6 +47,34 @@ TEST(JsonEnvelopeTest, ErrorsNameTheProblemAndStayShort) {
             std::string::npos);
   const std::string huge = R"({"hello": {"protocol_version": ")" + std::string(100000, '9') + R"("}})";
   EXPECT_LT(EnvelopeFromJson(huge, envelope).size(), 300u);
+}
+
+// The codec's message types are resolved once and shared by every session's
+// thread: the second and later calls, from any thread, read and write the same.
+TEST(JsonEnvelopeTest, SessionThreadsShareTheResolvedTypes) {
+  std::vector<std::thread> sessions;
+  std::atomic<int> wrong{0};
+  for (int t = 0; t < 4; ++t) {
+    sessions.emplace_back([t, &wrong] {
+      proto::Envelope envelope;
+      std::string json;
+      for (int i = 0; i < 50; ++i) {
+        const std::string camera = "cam" + std::to_string(t * 100 + i);
+        if (!EnvelopeFromJson(R"({"subscribe": {"camera": ")" + camera + R"(", "max_fps": 30}})", envelope).empty() ||
+            envelope.subscribe().camera() != camera ||
+            EnvelopeFromJson(R"({"subscribe": {"fps": 30}})", envelope).find("fps") == std::string::npos) {
+          ++wrong;
+        }
+        envelope.Clear();
+        envelope.mutable_subscribe()->set_camera(camera);
+        envelope.mutable_subscribe()->set_delivery(proto::DELIVERY_NEWEST);
+        EnvelopeToJson(envelope, json);
+        if (json != R"({"subscribe":{"camera":")" + camera + R"(","delivery":"DELIVERY_NEWEST"}})") ++wrong;
+      }
+    });
+  }
+  for (auto& session : sessions) session.join();
+  EXPECT_EQ(wrong.load(), 0);
 }
 
 TEST(ViewQueryTest, TakesRgbAndQualityAndNamesAnythingElse) {
