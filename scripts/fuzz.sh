@@ -5,7 +5,8 @@
 #                                     leak or timeout (the test command runs this)
 #   bash scripts/fuzz.sh long [N]     each target for N executions (default 10000000), one at a
 #                                     time, logs in build-fuzz/logs/; fails on any finding
-#                                     (FUZZ_MAX_SECONDS=S: at most S seconds per target)
+#                                     (FUZZ_MAX_SECONDS=S: at most S seconds per target;
+#                                     FUZZ_WORKERS=W: W processes per target at once)
 #   bash scripts/fuzz.sh seeds        rewrite the seed corpora in fuzz/corpus from real messages
 #   bash scripts/fuzz.sh merge        add to fuzz/corpus what the runs found (-set_cover_merge=1), keeping
 #                                     every named seed and 512 KB per target (FUZZ_CORPUS_BUDGET_BYTES)
@@ -73,11 +74,22 @@ short() {
 }
 
 # FUZZ_MAX_SECONDS caps each target's wall-clock time as well (a slow target stops short of N).
+# FUZZ_WORKERS=W splits each target's N executions over W processes at once (one per core),
+# sharing the scratch corpus, each with its own seed and log ($target.long.K.log).
 long() {
-  local runs=${1:-10000000} failed=0 cap=()
+  local runs=${1:-10000000} workers=${FUZZ_WORKERS:-1} failed=0 cap=()
   [ -n "${FUZZ_MAX_SECONDS:-}" ] && cap=(-max_total_time="$FUZZ_MAX_SECONDS")
   for target in $TARGETS; do
-    run "$target" "$BUILD_DIR/logs/$target.long.log" -runs="$runs" "${cap[@]}" || failed=1
+    if ((workers == 1)); then
+      run "$target" "$BUILD_DIR/logs/$target.long.log" -runs="$runs" "${cap[@]}" || failed=1
+      continue
+    fi
+    local pids=() k
+    for ((k = 1; k <= workers; k++)); do
+      run "$target" "$BUILD_DIR/logs/$target.long.$k.log" -runs=$((runs / workers)) -seed="$k" "${cap[@]}" &
+      pids+=($!)
+    done
+    for k in "${pids[@]}"; do wait "$k" || failed=1; done
   done
   return $failed
 }
