@@ -35,6 +35,7 @@ def test_the_shipped_card_fills_unset_settings_and_flags_win():
     sources = dcard.apply(a, card)
     controller = dc.from_arguments(p, a)
     assert (controller.steer_waypoint, controller.gain, controller.slowdown) == (2, 0.8, 0.5)
+    assert (controller.bend, controller.bend_limit) == (0.2, 1.5)
     assert (a.speed, a.frame_hz) == (8.0, 30.0)
     assert sources["steer_gain"] == "--steer-gain"
     assert sources["steer_waypoint"] == "model card %s" % os.path.join(SHIPPED, "model.json")
@@ -46,7 +47,7 @@ def test_without_a_card_the_defaults_are_the_papers_rule(tmp_path):
     assert dcard.for_model(str(tmp_path / "model.onnx"), None) is None
     sources = dcard.apply(a, None)
     assert set(sources.values()) == {"default"}
-    assert dc.from_arguments(p, a) == dc.Controller(1, 1.0, 0.0)
+    assert dc.from_arguments(p, a) == dc.Controller(1, 1.0, 0.0, 0.0, None)
 
 
 def test_a_card_that_does_not_fit_its_model_or_is_malformed_is_refused(tmp_path):
@@ -82,6 +83,7 @@ def test_the_plain_command_drives_the_shipped_model_as_it_was_selected(tmp_path)
     report = json.loads((out / "driving.json").read_text())
     s = report["settings"]
     assert (s["steer_waypoint"], s["steer_gain"], s["slowdown"], s["speed_m_s"], s["frame_hz"]) == (2, 0.9, 0.5, 8.0, 30.0)
+    assert (s["bend_correction"], s["bend_limit_m"]) == (0.2, 1.5)
     assert s["settings_from"]["steer_gain"].startswith("model card ")
     o = report["overall"]
     assert o["completed"] == 1 and o["lane_departures"] == 0

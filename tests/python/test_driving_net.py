@@ -191,6 +191,38 @@ def test_turn_slowdown_lowers_the_cap_and_brakes_down_to_it():
         dc.controls_from_waypoints(turn, speed=6.0, max_speed=8.0, slowdown=-1.0)
 
 
+def test_bend_correction_moves_the_aim_point_out_of_a_bend():
+    # waypoints on a right bend of radius 40 m (arc lengths 2, 4, 6, 8 m): the
+    # circle through the first three has curvature 1/40; aimed at the second
+    # (chord 80 sin(0.05) = 3.9933 m) the chord's offset from the arc is
+    # kappa l^2 / 2 = 0.1998 m, and C = 0.2 moves the aim point 0.03997 m left.
+    r = 40.0
+    bend = [c for s in (2, 4, 6, 8) for c in (r * math.sin(s / r), r * (1 - math.cos(s / r)))]
+    assert dc.bend_curvature(bend) == pytest.approx(1 / r, rel=1e-12)
+    chord2 = (2 * r * math.sin(2 / r)) ** 2
+    assert dc.bend_shift(bend, bend[2], bend[3], 0.2) == pytest.approx(-0.2 * chord2 / (2 * r), rel=1e-12)
+    assert dc.bend_shift(bend, bend[2], bend[3], 0.2) == pytest.approx(-0.03997, abs=1e-5)
+    left = [-x if i % 2 else x for i, x in enumerate(bend)]
+    assert dc.bend_curvature(left) == pytest.approx(-1 / r, rel=1e-12)
+    # the steering aims at the moved point; beyond the limit on |h4| (0.797 m here) nothing moves
+    steered = dc.controls_from_waypoints(bend, gain=0.9, steer_waypoint=2, bend=0.2, bend_limit=1.5)[0]
+    h = bend[3] + dc.bend_shift(bend, bend[2], bend[3], 0.2)
+    assert steered == pytest.approx(0.9 * math.degrees(math.atan2(h, bend[2])) / 35.0, rel=1e-12)
+    assert dc.bend_shift(bend, bend[2], bend[3], 0.2, bend_limit=0.7) == 0.0
+    assert dc.controls_from_waypoints(bend, steer_waypoint=2, bend=0.2, bend_limit=0.7) == \
+        dc.controls_from_waypoints(bend, steer_waypoint=2)
+    # a straight line, or two waypoints at one place: no bend
+    assert dc.bend_curvature([2, 0.1, 4, 0.2, 6, 0.3, 8, 0.4]) == pytest.approx(0.0, abs=1e-15)
+    assert dc.bend_curvature([2, 0, 2, 0, 6, 1, 8, 2]) == 0.0
+    # the same numbers as the C++ client from the same float32 inputs (driving_controller_test.cpp)
+    f32 = [float(np.float32(x)) for x in (1.999167, 0.049990, 3.993337, 0.199833, 5.977525, 0.449157, 7.946773, 0.797337)]
+    assert dc.bend_shift(f32, f32[2], f32[3], 0.2, 1.5) == -0.039967218370067864
+    with pytest.raises(ValueError, match="bend must be 0 ... 1, got 1.5"):
+        dc.Controller(bend=1.5)
+    with pytest.raises(ValueError, match="bend_limit must be positive, got 0"):
+        dc.Controller(bend=0.2, bend_limit=0)
+
+
 def test_the_controller_holds_the_choices_beyond_the_papers_rule():
     w = [2.0, 0.5, 4.0, 2.0, 6.0, 0.0, 8.0, 1.58]
     assert dc.Controller().controls(w) == dc.controls_from_waypoints(w)  # the defaults are the paper's rule
@@ -198,7 +230,8 @@ def test_the_controller_holds_the_choices_beyond_the_papers_rule():
     assert c.controls(w, speed=6.0, max_speed=8.0) == dc.controls_from_waypoints(
         w, speed=6.0, max_speed=8.0, gain=1.2, steer_waypoint=2, slowdown=2.0)
     assert c.controls(w)[0] == pytest.approx(1.2 * math.degrees(math.atan(0.5)) / 35.0)
-    assert c.settings() == {"steer_waypoint": 2, "steer_gain": 1.2, "slowdown": 2.0}
+    assert c.settings() == {"steer_waypoint": 2, "steer_gain": 1.2, "slowdown": 2.0, "bend_correction": 0.0,
+                            "bend_limit_m": None}
     for bad, message in (({"steer_waypoint": 0}, "steer_waypoint must be 1 ... 4, got 0"),
                          ({"gain": 0.0}, "gain must be positive, got 0.0"),
                          ({"gain": float("nan")}, "gain must be positive, got nan"),

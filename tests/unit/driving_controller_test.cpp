@@ -108,6 +108,8 @@ TEST(DrivingController, BadParametersAreRefusedNamingThem) {
   EXPECT_EQ(message({.t_max = 0.2}), "Controller: need 0 <= t_min <= t_max <= 1, got 0.3, 0.2");
   EXPECT_EQ(message({.t_max = 1.5}), "Controller: need 0 <= t_min <= t_max <= 1, got 0.3, 1.5");
   EXPECT_EQ(message({.t_min = -0.1}), "Controller: need 0 <= t_min <= t_max <= 1, got -0.1, 1");
+  EXPECT_EQ(message({.bend = 1.5}), "Controller: bend must be 0 ... 1, got 1.5");
+  EXPECT_EQ(message({.bend = 0.2, .bend_limit = 0}), "Controller: bend_limit must be positive, got 0");
 }
 
 }  // namespace
@@ -148,4 +150,27 @@ TEST(DrivingControllerTest, TurnSlowdownLowersTheCapAndBrakesDownToIt) {
   EXPECT_EQ(sim4cv::driving::Controller().FromWaypoints(turn, 20.0, 8.0).brake, 0.0);  // off by default
   params.slowdown = -1;
   EXPECT_THROW(sim4cv::driving::Controller{params}, std::invalid_argument);
+}
+
+TEST(DrivingControllerTest, BendCorrectionMovesTheAimPointOutOfABend) {
+  // Waypoints on a right bend of radius 40 m (arc lengths 2, 4, 6, 8 m): the curvature through the first
+  // three is 1/40, the chord to the second 3.9933 m, so C = 0.2 moves the aim point 0.2 * 15.987 / 80 =
+  // 0.03997 m to the left; the exact values are driving_control.py's from the same float inputs.
+  const sim4cv::driving::Waypoints bend{1.999167f, 0.049990f, 3.993337f, 0.199833f,
+                                        5.977525f, 0.449157f, 7.946773f, 0.797337f};
+  sim4cv::driving::ControllerParams params;
+  params.steer_waypoint = 2;
+  params.gain = 0.9;
+  EXPECT_NEAR(sim4cv::driving::Controller(params).FromWaypoints(bend).steering, 0.07366585659428386, 1e-15);
+  params.bend = 0.2;
+  params.bend_limit = 1.5;
+  const sim4cv::driving::Controller controller(params);
+  EXPECT_NEAR(controller.BendShift(bend, bend[2], bend[3]), -0.03997, 1e-5);
+  EXPECT_NEAR(controller.BendShift(bend, bend[2], bend[3]), -0.039967218370067864, 1e-15);
+  EXPECT_NEAR(controller.FromWaypoints(bend).steering, 0.05895013835340126, 1e-15);
+  sim4cv::driving::Waypoints left = bend;  // the same bend to the left: moved right by as much
+  for (int i = 1; i < 8; i += 2) left[i] = -left[i];
+  EXPECT_NEAR(controller.BendShift(left, left[2], left[3]), 0.039967218370067864, 1e-15);
+  params.bend_limit = 0.7;  // |h4| = 0.797 beyond the limit: no correction
+  EXPECT_EQ(sim4cv::driving::Controller(params).BendShift(bend, bend[2], bend[3]), 0.0);
 }

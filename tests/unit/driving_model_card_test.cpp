@@ -43,6 +43,8 @@ TEST_F(ModelCardTest, TheShippedCardHoldsTheSelectedControllerSettings) {
   EXPECT_DOUBLE_EQ(card->steer_gain.value(), 0.9);
   EXPECT_DOUBLE_EQ(card->speed_m_s.value(), 8.0);
   EXPECT_DOUBLE_EQ(card->turn_slowdown.value(), 0.5);
+  EXPECT_DOUBLE_EQ(card->bend_correction.value(), 0.2);
+  EXPECT_DOUBLE_EQ(card->bend_limit_m.value(), 1.5);
   EXPECT_NO_THROW(card->CheckModel(90, 160, true));
 }
 
@@ -76,6 +78,8 @@ TEST_F(ModelCardTest, BadSettingsAndBadJsonAreRefusedNamingTheFile) {
   EXPECT_NE(refusal(R"({"steer_waypoint": 5})").find("controller setting \"steer_waypoint\" has a bad value 5"),
             std::string::npos);
   EXPECT_NE(refusal(R"({"steer_gain": -1})").find("\"steer_gain\" has a bad value -1"), std::string::npos);
+  EXPECT_NE(refusal(R"({"bend_correction": 2})").find("\"bend_correction\" has a bad value 2"), std::string::npos);
+  EXPECT_NE(refusal(R"({"bend_limit_m": 0})").find("\"bend_limit_m\" has a bad value 0"), std::string::npos);
   EXPECT_NE(refusal(R"({"steering_gain": 1})").find("unknown controller setting \"steering_gain\""),
             std::string::npos);
   EXPECT_NE(refusal("[").find((dir_ / "model.json").string() + " is not readable JSON"), std::string::npos);

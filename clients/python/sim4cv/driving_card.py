@@ -21,11 +21,14 @@ FORMAT = "sim4cv driving model card 1"
 OUTPUTS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
 
 # The settings a card's "controller" holds: card key -> (command-line dest,
-# flag, built-in default, check). The defaults are the paper's rule at 8 m/s, 30 Hz.
+# flag, built-in default, check). The defaults are the paper's rule at 8 m/s, 30 Hz;
+# a default of None (no bend limit) is left out of a new card.
 SETTINGS = {
     "steer_waypoint": ("steer_waypoint", "--steer-waypoint", 1, lambda v: 1 <= v <= 4),
     "steer_gain": ("steer_gain", "--steer-gain", 1.0, lambda v: v > 0),
     "turn_slowdown": ("turn_slowdown", "--turn-slowdown", 0.0, lambda v: v >= 0),
+    "bend_correction": ("bend_correction", "--bend-correction", 0.0, lambda v: 0 <= v <= 1),
+    "bend_limit_m": ("bend_limit", "--bend-limit", None, lambda v: v > 0),
     "speed_m_s": ("speed", "--speed", 8.0, lambda v: v > 0),
     "frame_hz": ("frame_hz", "--frame-hz", 30.0, lambda v: v > 0),
 }
@@ -89,7 +92,8 @@ def apply(args, card: Optional[dict]) -> Dict[str, str]:
             sources[key] = flag
         elif card is not None and key in card["controller"]:
             value = card["controller"][key]
-            setattr(args, dest, value if isinstance(default, int) and value != int(value) else type(default)(value))
+            whole = isinstance(default, int) and value == int(value)
+            setattr(args, dest, int(value) if whole else float(value))
             sources[key] = "model card %s" % card["path"]
         else:
             setattr(args, dest, default)
@@ -117,7 +121,7 @@ def card_for(height: int, width: int, use_goal: bool, controller: Optional[dict]
                   "camera": dict(CAMERA_SETTINGS)},
         "output": {"names": OUTPUTS, "unit": "m", "axes": "v forward, h positive to the right",
                    "spacing_m": 2.0},
-        "controller": controller or {key: s[2] for key, s in SETTINGS.items()},
+        "controller": controller or {key: s[2] for key, s in SETTINGS.items() if s[2] is not None},
         "selected": selected or {"status": "not selected in closed loop: the paper's controller"},
     }
 

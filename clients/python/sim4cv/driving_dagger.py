@@ -125,7 +125,8 @@ def _check_out(out: str, settings: dict) -> None:
             raise dd.DatasetError("%s is unreadable (%s); refusing to overwrite it" % (os.path.join(out, name), e))
         old = old.get("dagger") if name == "dataset.json" else {
             "model": old.get("model"), "takeover_m": old.get("takeover_m"), "speed_m_s": old.get("speed_m_s"),
-            "obstacles": old.get("obstacles") or None, **{k: old.get(k) for k in dc.Controller().settings()}}
+            "obstacles": old.get("obstacles") or None,
+            **{k: old.get(k, v) for k, v in dc.Controller().settings().items()}}  # older ones: the defaults
         mine = settings if name == "dataset.json" else {k: settings.get(k) for k in old}
         if old != mine:
             raise dd.DatasetError("%s holds a dagger dataset of other settings (%s, not %s); use another --out; "

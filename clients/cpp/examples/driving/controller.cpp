@@ -42,6 +42,25 @@ Controller::Controller(ControllerParams params) : params_(params) {
   if (!(params_.steer_waypoint >= 1 && params_.steer_waypoint <= 4)) {
     throw std::invalid_argument("Controller: steer_waypoint must be 1 ... 4, got " + Number(params_.steer_waypoint));
   }
+  if (!(params_.bend >= 0 && params_.bend <= 1)) {
+    throw std::invalid_argument("Controller: bend must be 0 ... 1, got " + Number(params_.bend));
+  }
+  if (!(params_.bend_limit > 0)) {
+    throw std::invalid_argument("Controller: bend_limit must be positive, got " + Number(params_.bend_limit));
+  }
+}
+
+double Controller::BendShift(const Waypoints& w, double v, double h) const {
+  if (std::fabs(w[7]) > params_.bend_limit) return 0.0;
+  // driving_control.bend_curvature: Menger curvature of waypoints 1-3, in double as Python computes it.
+  const double ax = double(w[2]) - w[0], ay = double(w[3]) - w[1];
+  const double bx = double(w[4]) - w[0], by = double(w[5]) - w[1];
+  const double cross = ax * by - ay * bx;
+  const double cx = double(w[4]) - w[2], cy = double(w[5]) - w[3];
+  // sqrt, not hypot: CPython's math.hypot is its own code and may differ from libm's in the last bit.
+  const double sides = std::sqrt(ax * ax + ay * ay) * std::sqrt(bx * bx + by * by) * std::sqrt(cx * cx + cy * cy);
+  const double kappa = sides == 0 ? 0.0 : 2 * cross / sides;
+  return -(params_.bend * kappa * (v * v + h * h) / 2.0);
 }
 
 double Controller::Steering(double v1, double h1) const {
@@ -65,6 +84,7 @@ DriveControls Controller::FromWaypoints(const Waypoints& w, std::optional<double
     v += f * (static_cast<double>(w[2 * k + 2]) - v);
     h += f * (static_cast<double>(w[2 * k + 3]) - h);
   }
+  if (params_.bend != 0) h += BendShift(w, v, h);
   double brake = 0.0;
   if (params_.slowdown != 0 && max_speed) {
     // driving_control.turn_speed_cap, and the brake down to it

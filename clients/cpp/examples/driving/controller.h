@@ -11,12 +11,16 @@
 //   slowdown S > 0 (off by default): the cap falls to
 //   max(min(4, max_speed), max_speed - S * |h4|) and the car brakes
 //   clip(0.5 * (speed - cap), 0, 1) above it (driving_control.turn_speed_cap)
+//   bend C > 0 (off by default): the aim point (v, h) moves towards the bend's
+//   outside, h -= C * kappa * (v^2 + h^2) / 2 while |h4| <= bend_limit, kappa
+//   the signed curvature through waypoints 1-3 (driving_control.bend_shift)
 //
 // Same defaults, same clamping and the same results as the Python module,
 // NaN inputs included (the clamps are Python's min/max, see controller.cpp).
 #pragma once
 
 #include <array>
+#include <limits>
 #include <optional>
 
 namespace sim4cv::driving {
@@ -32,6 +36,8 @@ struct ControllerParams {
   double k = 0.25;                 // throttle lost per metre of |h4|
   double slowdown = 0;             // m/s of speed cap lost per metre of |h4| (0: off)
   double steer_waypoint = 1;       // the waypoint the steering aims at, 1 (the paper) ... 4; 1.5: halfway between 1 and 2
+  double bend = 0;                 // 0 ... 1: fraction of the chord's offset corrected in a bend (0: off)
+  double bend_limit = std::numeric_limits<double>::infinity();  // m: no bend correction while |h4| exceeds it
 };
 
 struct DriveControls {
@@ -43,8 +49,8 @@ struct DriveControls {
 class Controller {
  public:
   // Throws std::invalid_argument for max_steering_deg <= 0 or unless
-  // 0 <= t_min <= t_max <= 1 or steer_waypoint outside 1 ... 4
-  // (driving_control.py raises ValueError for them).
+  // 0 <= t_min <= t_max <= 1, steer_waypoint outside 1 ... 4, bend outside
+  // 0 ... 1 or bend_limit <= 0 (driving_control.py raises ValueError for them).
   explicit Controller(ControllerParams params = {});
 
   // Controls.steering in [-1, 1] (positive right) towards the waypoint (v1
@@ -55,7 +61,10 @@ class Controller {
   // speed and max_speed (m/s) are given and speed >= max_speed.
   double Throttle(double h4, std::optional<double> speed = std::nullopt,
                   std::optional<double> max_speed = std::nullopt) const;
-  // (steering, throttle, brake 0) from the 8 numbers, for Client::SendControls.
+  // Metres to the right the bend correction moves the aim point (v, h):
+  // -bend * kappa * (v^2 + h^2) / 2, or 0 when |h4| > bend_limit.
+  double BendShift(const Waypoints& waypoints, double v, double h) const;
+  // (steering, throttle, brake) from the 8 numbers, for Client::SendControls.
   DriveControls FromWaypoints(const Waypoints& waypoints, std::optional<double> speed = std::nullopt,
                               std::optional<double> max_speed = std::nullopt) const;
 

@@ -37,6 +37,8 @@ struct Options {
   std::optional<double> steer_waypoint;  // 1: the paper's rule; 2 is steadier with a noisy first waypoint
   std::optional<double> steer_gain;    // 1: the paper's rule
   std::optional<double> turn_slowdown;  // 0: the paper's throttle
+  std::optional<double> bend_correction;  // 0: the paper's rule
+  std::optional<double> bend_limit;       // m; unset: no limit
   int goal = 0;
   bool left_lane = false;
   long frames_count = 0;  // 0: until Ctrl-C
@@ -79,6 +81,10 @@ Options ParseArgs(int argc, char** argv) {
       o.steer_gain = ParseNumber(flag, value, 0.01, 10.0);
     } else if (flag == "--turn-slowdown") {
       o.turn_slowdown = ParseNumber(flag, value, 0.0, 100.0);
+    } else if (flag == "--bend-correction") {
+      o.bend_correction = ParseNumber(flag, value, 0.0, 1.0);
+    } else if (flag == "--bend-limit") {
+      o.bend_limit = ParseNumber(flag, value, 0.01, 100.0);
     } else if (flag == "--goal") {
       if (value != "-1" && value != "0" && value != "1")
         throw UsageError("--goal wants -1, 0 or 1, got '" + value + "'");
@@ -184,6 +190,8 @@ int Run(const Options& o) {
   params.gain = choose("steer_gain", o.steer_gain, card ? card->steer_gain : std::nullopt, params.gain);
   params.slowdown = choose("turn_slowdown", o.turn_slowdown, card ? card->turn_slowdown : std::nullopt,
                            params.slowdown);
+  params.bend = choose("bend_correction", o.bend_correction, card ? card->bend_correction : std::nullopt, params.bend);
+  params.bend_limit = choose("bend_limit_m", o.bend_limit, card ? card->bend_limit_m : std::nullopt, params.bend_limit);
   const double max_speed = choose("speed_m_s", o.max_speed, card ? card->speed_m_s : std::nullopt, 8.0);
   const driving::Controller controller(params);
   std::printf("model %s: %dx%d RGB%s\n%s\n", o.model.c_str(), model.width(), model.height(),
@@ -315,9 +323,10 @@ int main(int argc, char** argv) {
     if (*e.what() != '\0') std::cerr << "sim4cv_drive: " << e.what() << "\n";
     std::cerr << "usage: sim4cv_drive --model FILE.onnx --frames ADDRESS [--controls ADDRESS] --car NAME_OR_ID "
                  "--camera NAME [--add-camera] [--max-speed M/S] [--goal -1|0|1] [--lane left|right] "
-                 "[--steer-waypoint 1-4] [--steer-gain G] [--turn-slowdown S] [--frames-count N] [--lockstep]\n"
-                 "  unset --max-speed, --steer-waypoint, --steer-gain, --turn-slowdown: model.json beside the "
-                 "model, else 8, 1, 1, 0\n"
+                 "[--steer-waypoint 1-4] [--steer-gain G] [--turn-slowdown S] [--bend-correction C] [--bend-limit M] "
+                 "[--frames-count N] [--lockstep]\n"
+                 "  unset --max-speed, --steer-waypoint, --steer-gain, --turn-slowdown, --bend-correction, "
+                 "--bend-limit: model.json beside the model, else 8, 1, 1, 0, 0, none\n"
                  "  ADDRESS: tcp://HOST:PORT, udp://HOST:PORT or shm://NAME; --controls defaults to the daemon's UDP "
                  "port\n";
     return 2;

@@ -78,6 +78,12 @@ std::optional<ModelCard> ReadModelCard(const std::string& model_path) {
     } else if (key == "turn_slowdown") {
       if (!(v >= 0 && std::isfinite(v))) throw bad();
       card.turn_slowdown = v;
+    } else if (key == "bend_correction") {
+      if (!(v >= 0 && v <= 1)) throw bad();
+      card.bend_correction = v;
+    } else if (key == "bend_limit_m") {
+      if (!(v > 0 && std::isfinite(v))) throw bad();
+      card.bend_limit_m = v;
     } else {
       throw CardError("model card " + card.path + ": unknown controller setting \"" + key + "\"");
     }

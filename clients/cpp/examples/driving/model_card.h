@@ -29,6 +29,8 @@ struct ModelCard {
   std::optional<double> steer_waypoint;   // 1 ... 4 (a fraction: between two waypoints)
   std::optional<double> steer_gain;       // > 0
   std::optional<double> turn_slowdown;    // >= 0
+  std::optional<double> bend_correction;  // 0 ... 1
+  std::optional<double> bend_limit_m;     // > 0
   std::optional<double> speed_m_s;        // > 0, the speed cap
   std::optional<double> frame_hz;         // > 0, the evaluation's frame rate (not used when driving)
 
