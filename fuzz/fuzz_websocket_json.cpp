@@ -31,8 +31,8 @@ using sim4cv::session::ClientProtocol;
 // The same parser makes many small allocations per message, and with ASan's
 // default 256 MB quarantine recycling freed chunks took a third of the run's
 // time (669 exec/s against 940 with 4 MB, same seed and corpus, 40 s each) and
-// 326 MB of memory. A use after free is still caught while the chunk is among
-// the last 4 MB freed: far more than one input's messages allocate.
+// 326 MB of memory. A use after free is still caught while the freed chunk is
+// among the last 4 MB freed (older ones may be reused by then).
 extern "C" const char* __asan_default_options() {
   return "malloc_context_size=2:quarantine_size_mb=4";
 }

@@ -75,7 +75,8 @@ short() {
 
 # FUZZ_MAX_SECONDS caps each target's wall-clock time as well (a slow target stops short of N).
 # FUZZ_WORKERS=W splits each target's N executions over W processes at once (one per core),
-# sharing the scratch corpus, each with its own seed and log ($target.long.K.log).
+# sharing the scratch corpus, each with its own seed and log ($target.long.K.log); the first
+# N mod W workers run one more, so the counts add up to N.
 long() {
   local runs=${1:-10000000} workers=${FUZZ_WORKERS:-1} failed=0 cap=()
   [ -n "${FUZZ_MAX_SECONDS:-}" ] && cap=(-max_total_time="$FUZZ_MAX_SECONDS")
@@ -86,7 +87,8 @@ long() {
     fi
     local pids=() k
     for ((k = 1; k <= workers; k++)); do
-      run "$target" "$BUILD_DIR/logs/$target.long.$k.log" -runs=$((runs / workers)) -seed="$k" "${cap[@]}" &
+      run "$target" "$BUILD_DIR/logs/$target.long.$k.log" -runs=$((runs / workers + (k <= runs % workers))) \
+        -seed="$k" "${cap[@]}" &
       pids+=($!)
     done
     for k in "${pids[@]}"; do wait "$k" || failed=1; done
