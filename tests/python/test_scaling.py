@@ -65,20 +65,6 @@ def assert_same_results(out, reference):
     assert "Tasks not done" not in (out / "report.md").read_text()
 
 
-def task_processes(out_dir):
-    """PIDs of `run-one OUT_DIR` processes."""
-    pids = []
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            with open("/proc/%s/cmdline" % pid, "rb") as f:
-                argv = f.read().split(b"\0")
-        except OSError:
-            continue
-        if b"run-one" in argv and str(out_dir).encode() in argv:
-            pids.append(int(pid))
-    return pids
-
-
 def marked_processes(marker, out_dir):
     """PIDs whose environment holds SIM4CV_TASK=<marker...> and SIM4CV_TASK_DIR=out_dir
     (other tests' studies may run beside)."""
@@ -125,6 +111,18 @@ def wait_for(predicate, timeout=120, what="condition"):
     raise AssertionError("timed out waiting for " + what)
 
 
+def task_mid_run(prefix, out_dir):
+    """(marker, run-one pid) of a task whose marker starts with `prefix` once its daemon and
+    tracker processes are up: killed then, it cannot have written its result."""
+    daemon = wait_for(lambda: [p for p in marked_processes(prefix, out_dir) if comm(p) == "sim4cvd"],
+                      what="a daemon marked " + prefix)
+    marker = [line.split("=", 1)[1] for line in open("/proc/%d/environ" % daemon[0], "rb").read().decode().split("\0")
+              if line.startswith("SIM4CV_TASK=")][0]
+    # run-one, daemon, tracker
+    wait_for(lambda: len(marked_processes(marker, out_dir)) >= 3, what="the tracker process of " + marker)
+    return marker, int(marker.split("-")[-1])  # the run-one process: <job>-<index>-<pid>
+
+
 def test_task_killed_with_kill9_leaves_nothing(tmp_path):
     """A task of the local executor killed with kill -9 mid-run (its daemon and
     tracker processes up) leaves no process, semaphore or temporary folder, and
@@ -133,11 +131,7 @@ def test_task_killed_with_kill9_leaves_nothing(tmp_path):
     shm_before = set(os.listdir("/dev/shm"))
     run = subprocess.Popen([sys.executable, "-m", "sim4cv.experiment", "run", SWEEP, "--jobs", "1", "--out", str(out)],
                            cwd=REPO_ROOT, env=ENV, stderr=subprocess.PIPE, text=True)
-    daemon = wait_for(lambda: [p for p in marked_processes("local-1-", out) if comm(p) == "sim4cvd"], what="task 1's daemon")
-    marker = [line.split("=", 1)[1] for line in open("/proc/%d/environ" % daemon[0], "rb").read().decode().split("\0")
-              if line.startswith("SIM4CV_TASK=")][0]
-    task_pid = int(marker.split("-")[-1])  # the run-one process: local-<index>-<pid>
-    wait_for(lambda: len(marked_processes(marker, out)) >= 3, what="the task's tracker process")  # run-one, daemon, tracker
+    marker, task_pid = task_mid_run("local-1-", out)
     shm_during = set(os.listdir("/dev/shm")) - shm_before
     os.kill(task_pid, signal.SIGKILL)
     _, err = run.communicate(timeout=240)
@@ -206,8 +200,8 @@ def test_dask_local_cluster_kill_resubmit(tmp_path, reference):
     run = subprocess.Popen([sys.executable, "-m", "sim4cv.experiment", "run", SWEEP, "--executor", "dask", "--jobs",
                             "2", "--retries", "0", "--out", str(out)], cwd=REPO_ROOT, env=ENV, stderr=subprocess.PIPE,
                            text=True)
-    victim = wait_for(lambda: task_processes(out), what="a run-one process")[0]
-    time.sleep(1.0)  # mid-run
+    # the first task whose daemon and tracker are up (a fixed sleep raced a fast task's end)
+    _, victim = task_mid_run("local-", out)
     os.kill(victim, signal.SIGKILL)
     _, err = run.communicate(timeout=240)
     assert run.returncode == 1 and "failed" in err, err  # no retries: one task is not done
