@@ -67,6 +67,8 @@ std::string FragmentShader(PlaneSet planes, uint32_t look) {
   if (look & ChannelProgram::kShadows) declarations.insert(after_version, "#define SIM4CV_SHADOWS\n");
   if (look & ChannelProgram::kFull) declarations.insert(after_version, "#define SIM4CV_FULL_LOOK\n");
   if (look & ChannelProgram::kFlatGround) declarations.insert(after_version, "#define SIM4CV_FLAT_GROUND\n");
+  if (look & ChannelProgram::kWet) declarations.insert(after_version, "#define SIM4CV_WET\n");
+  if (look & ChannelProgram::kVariation) declarations.insert(after_version, "#define SIM4CV_VARIATION\n");
   std::string body = "void main() {\n";
   std::array<const char*, channels::kPixelChannelCount> declared{};  // functions shared by channels (shading.h) once
   for (std::size_t i = 0; i < channels::kPixelChannelCount; ++i) {

@@ -21,9 +21,20 @@ class ChannelProgram {
   // pay for a uniform branch's untaken side): the full look (else the
   // fast one), and in the full look sun shadows, sensor noise and lanterns;
   // kFlatGround: the full look's program for flat ground only (road, sidewalk,
-  // terrain, markings), without the other classes' materials.
-  enum RgbLook : uint32_t { kFast = 0, kFull = 1, kShadows = 2, kNoise = 4, kLamps = 8, kFlatGround = 16 };
-  inline static constexpr uint32_t kRgbLooks = 32;  // every combination of the bits
+  // terrain, markings), without the other classes' materials; kWet: the full
+  // look's wet ground (darker, puddles mirroring the sky), left out when dry;
+  // kVariation: domain randomisation's colour jitter per object.
+  enum RgbLook : uint32_t {
+    kFast = 0,
+    kFull = 1,
+    kShadows = 2,
+    kNoise = 4,
+    kLamps = 8,
+    kFlatGround = 16,
+    kWet = 32,
+    kVariation = 64
+  };
+  inline static constexpr uint32_t kRgbLooks = 128;  // every combination of the bits
   ChannelProgram(PlaneSet planes, uint32_t look);
   ~ChannelProgram();
   ChannelProgram(const ChannelProgram&) = delete;

@@ -553,6 +553,13 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   // The light (shadows, noise, lamps) is RGB's alone; the full look's materials are every look plane's.
   const bool full_rgb = gl.look.full && (planes & (1u << kRgbPlane)) != 0;
   const auto full_look = [&](PlaneSet drawn) { return gl.look.full && (drawn & gl.look_planes) != 0; };
+  // The materials (RGB's and albedo's): the full look's, wet or dry, with or without the
+  // colour jitter, or the fast one.
+  const auto material_look = [&](PlaneSet drawn) {
+    if (!full_look(drawn)) return static_cast<uint32_t>(ChannelProgram::kFast);
+    return ChannelProgram::kFull | (gl.look.wetness > 0.0f ? ChannelProgram::kWet : 0u) |
+           (gl.look.variation != 0 ? ChannelProgram::kVariation : 0u);
+  };
   glBindVertexArray(gl.vertex_array);
   ShadowSampling shadow;
   if (full_rgb && gl.look.shadows) shadow = gl.DrawShadows(camera, items);
@@ -561,7 +568,7 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
       Perspective(lens ? WidenedFov(camera.fov_y_deg, widening) : camera.fov_y_deg,
                   static_cast<float>(camera.width) / static_cast<float>(camera.height), camera.near_m, camera.far_m),
       shadow};
-  uint32_t rgb_look = full_look(planes) ? ChannelProgram::kFull : ChannelProgram::kFast;
+  uint32_t rgb_look = material_look(planes);
   if (full_rgb) {
     rgb_look |= (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
                 (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u) |
@@ -571,7 +578,7 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   if (fine_planes != 0) {
     if (!gl.fine) gl.fine = std::make_unique<RenderTargets>(kFineScale * gl.max_width, kFineScale * gl.max_height);
     gl.DrawPass(pass, items, *gl.fine, kFineScale, fine_planes,
-                full_look(fine_planes) ? ChannelProgram::kFull : ChannelProgram::kFast, {});
+                material_look(fine_planes), {});
   }
   // Last, so the counting pass below finds this pass's stencil, program and viewport.
   if (planes != 0) {

@@ -18,7 +18,7 @@ uniform vec4 u_weather;          // x: clouds, y: wetness, z: night lights, w: e
 uniform vec3 u_camera_position;  // world
 uniform mat4 u_shadow_from_world;  // to the shadow map's [0,1]^3
 uniform sampler2DShadow u_shadow_map;
-uniform uint u_variation;          // 0: none; else the seed of a colour jitter per object
+uniform uint u_variation;          // the seed of a colour jitter per object, with SIM4CV_VARIATION
 uniform vec2 u_noise;              // sensor noise: read sigma, shot gain, in [0, 1] units; 0, 0: none
 uniform uint u_noise_seed;         // per frame and camera
 uniform vec3 u_lamps[4];           // Renderer::kMaxLamps street lanterns nearest the view (world), with SIM4CV_LAMPS
@@ -43,10 +43,13 @@ float HashU(uint h) { return float(Mix(h) >> 8) * (1.0 / 16777216.0); }
 // and each class of unlabelled surface (road, grass...) gets its own tint,
 // the same in every frame of one u_variation.
 vec3 Vary(vec3 base, uint semantic) {
-  if (u_variation == 0u) return base;
+#ifndef SIM4CV_VARIATION  // u_variation 0: no jitter, and no code for it
+  return base;
+#else
   uint h = Mix((u_instance != 0u ? u_instance : semantic + 65536u) * 0x9e3779b9u ^ u_variation);
   vec3 jitter = vec3(uvec3(h, h >> 8, h >> 16) & 255u) / 255.0;
   return clamp(base * (0.65 + 0.7 * jitter), 0.0, 1.0);
+#endif
 }
 // A value in [0, 1) per integer cell; `cell` holds whole numbers (floor()).
 float Hash(vec2 cell) {
@@ -204,14 +207,21 @@ Surface Material(uint c, vec3 base, vec3 p, vec3 n, float distance) {
     }
   }
 #endif
-  if (flat_ground) {  // wet: darker, and puddles that mirror the sky
+  if (flat_ground) {
+    s.reflectance = 0.03;
+#ifdef SIM4CV_WET
+    // wet: darker, and puddles that mirror the sky
     float wet = u_weather.y;
     float puddle = (c == 0u) ? smoothstep(0.62, 0.75, blotch) : 0.0;
     s.albedo *= 1.0 - (c == 9u ? 0.3 : 0.6) * wet;
-    s.reflectance = 0.03;
     s.mirror = wet * (0.3 + 0.6 * puddle);
     s.specular = 0.1 + wet * 2.0;
     s.shininess = 24.0 + wet * 200.0;
+#else
+    // dry (the look's wetness 0): the wet branch's values at wet = 0, a mirror of 0
+    s.specular = 0.1;
+    s.shininess = 24.0;
+#endif
   }
   return s;
 }
@@ -264,11 +274,13 @@ vec4 ShadeFull(vec3 base, vec3 world_normal, vec3 p, uint semantic_and_flags, fl
   // Lamps and headlights (kEmissive) glow with their own colour at night.
   vec3 glow = (semantic_and_flags & 256u) != 0u ? base * (4.0 * u_weather.z) : vec3(0.0);
   vec3 c = s.albedo * light + u_sun * (direct * s.specular * highlight) + s.emission + glow;
+#if defined(SIM4CV_WET) || !defined(SIM4CV_FLAT_GROUND)  // dry flat ground mirrors nothing (mirror 0)
   // Schlick's Fresnel: the sky shows most at grazing angles.
   float grazing = 1.0 - max(dot(n, to_eye), 0.0);
   float grazing2 = grazing * grazing;
   float fresnel = s.reflectance + (1.0 - s.reflectance) * grazing2 * grazing2 * grazing;
   c = mix(c, SkyReflection(reflect(-to_eye, n)), fresnel * s.mirror);
+#endif
   return Expose(c, fog);
 }
 )";

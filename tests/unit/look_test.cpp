@@ -350,6 +350,21 @@ TEST_F(LookRenderTest, NightIsDarkerThanDuskAndDuskThanNoonAndRainDarkensTheRoad
   EXPECT_LT(road_luma(wet), 0.85 * road_luma(dry));
 }
 
+// The colour jitter of domain randomisation is compiled into the materials only
+// when the look has one (ChannelProgram::kVariation): with it every object's
+// colour moves, without it the frame is the plain look's, byte for byte.
+TEST_F(LookRenderTest, ColourJitterTintsTheRgbOnlyWhenTheLookHasOne) {
+  const Look plain = LookOf(conditions::Of(Preset::CLEAR_NOON));
+  Look jittered = plain;
+  jittered.variation = 12345;
+  const Shot first = Render(0, plain);
+  const Shot tinted = Render(0, jittered);
+  const Shot again = Render(0, plain);
+  EXPECT_TRUE(SameBytes(first.frame.rgb, again.frame.rgb)) << "no jitter left behind by the jittered program";
+  EXPECT_FALSE(SameBytes(first.frame.rgb, tinted.frame.rgb));
+  EXPECT_TRUE(SameBytes(first.frame.mask, tinted.frame.mask));
+}
+
 TEST_F(LookRenderTest, FogHidesTheDistance) {
   const std::size_t front = 1;  // car_front: looks down the road to the horizon
   const Shot clear = Render(front, conditions::Of(Preset::OVERCAST));
