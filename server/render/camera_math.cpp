@@ -50,4 +50,16 @@ Eigen::Matrix4f RigidInverse(const Eigen::Matrix4f& rigid) {
   return inverse;
 }
 
+std::array<Eigen::Vector4f, 6> FrustumPlanes(const Eigen::Matrix4f& clip_from_world) {
+  std::array<Eigen::Vector4f, 6> planes;
+  const Eigen::Vector4f w = clip_from_world.row(3).transpose();
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector4f row = clip_from_world.row(axis).transpose();
+    planes[2 * axis] = w + row;
+    planes[2 * axis + 1] = w - row;
+  }
+  for (Eigen::Vector4f& plane : planes) plane /= plane.head<3>().norm();
+  return planes;
+}
+
 }  // namespace sim4cv::render

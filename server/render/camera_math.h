@@ -3,6 +3,8 @@
 // along -z), and projections map to OpenGL clip space (z in [-w, w]).
 #pragma once
 
+#include <array>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -21,5 +23,10 @@ Eigen::Matrix4f PoseMatrix(const Eigen::Vector3f& position, const Eigen::Quatern
 // Inverse of a rigid transform (rotation + translation), cheaper and more exact
 // than a general 4x4 inverse.
 Eigen::Matrix4f RigidInverse(const Eigen::Matrix4f& rigid);
+
+// The six planes (a, b, c, d) of the frustum of `clip_from_world`, normals pointing
+// inside and of unit length: a world point p is inside where a p.x + b p.y + c p.z + d >= 0
+// for all six (Gribb & Hartmann).
+std::array<Eigen::Vector4f, 6> FrustumPlanes(const Eigen::Matrix4f& clip_from_world);
 
 }  // namespace sim4cv::render

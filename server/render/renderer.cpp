@@ -11,6 +11,7 @@
 #include <functional>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "server/common/check.h"
 #include "server/render/camera_math.h"
@@ -81,20 +82,6 @@ MeshRange BoundingSphere(const Mesh& mesh) {
     range.sphere_radius = std::max(range.sphere_radius, (p - range.sphere_center).norm());
   }
   return range;
-}
-
-// The six frustum planes (a, b, c, d), normals pointing inside and unit length,
-// of clip_from_world (Gribb & Hartmann).
-std::array<Eigen::Vector4f, 6> FrustumPlanes(const Eigen::Matrix4f& clip_from_world) {
-  std::array<Eigen::Vector4f, 6> planes;
-  const Eigen::Vector4f w = clip_from_world.row(3).transpose();
-  for (int axis = 0; axis < 3; ++axis) {
-    const Eigen::Vector4f row = clip_from_world.row(axis).transpose();
-    planes[2 * axis] = w + row;
-    planes[2 * axis + 1] = w - row;
-  }
-  for (Eigen::Vector4f& plane : planes) plane /= plane.head<3>().norm();
-  return planes;
 }
 
 }  // namespace
@@ -169,6 +156,8 @@ struct Renderer::Impl {
   };
   void DrawPass(const Pass& pass, std::span<const DrawItem> items, RenderTargets& into, uint32_t scale, PlaneSet planes,
                 uint32_t look, std::span<uint32_t> unoccluded_pixels);
+  // `item`'s bounding sphere in the world: centre, radius.
+  std::pair<Eigen::Vector3f, float> WorldSphere(const DrawItem& item) const;
   bool InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const;
   // The mesh `item` is drawn with from the camera last set (DrawItem::far_mesh).
   void SetLodCamera(const CameraView& camera);
@@ -180,7 +169,9 @@ struct Renderer::Impl {
   void DrawScene(std::span<const DrawItem> items, const std::array<Eigen::Vector4f, 6>& planes,
                  std::span<uint32_t> unoccluded_pixels, const std::function<void()>& before_ground);
   // Draws the sun's shadow map of `items` for `camera`; how to sample it.
-  ShadowSampling DrawShadows(const CameraView& camera, std::span<const DrawItem> items);
+  // Only the moving casters whose shadow can fall inside `view_planes` (ShadowCanReach).
+  ShadowSampling DrawShadows(const CameraView& camera, std::span<const DrawItem> items,
+                             const std::array<Eigen::Vector4f, 6>& view_planes);
   // Reads the planes in `through` from the effects pass, the rest from the scene.
   void ReadBack(const CameraView& camera, const FrameBuffers& out, PlaneSet through) const;
   // With a lens, the occlusion queries counted undistorted pixels: rescales
@@ -238,12 +229,16 @@ void Renderer::Impl::UsePlanes(RenderTargets& into, PlaneSet planes, uint32_t lo
   glUseProgram(program->id());
 }
 
-bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const {
+std::pair<Eigen::Vector3f, float> Renderer::Impl::WorldSphere(const DrawItem& item) const {
   const MeshRange& mesh = meshes[item.mesh];
   const Eigen::Vector3f center =
       item.world_from_model.topLeftCorner<3, 3>() * mesh.sphere_center + item.world_from_model.block<3, 1>(0, 3);
   const float largest_scale = item.world_from_model.topLeftCorner<3, 3>().colwise().norm().maxCoeff();
-  const float radius = mesh.sphere_radius * largest_scale;
+  return {center, mesh.sphere_radius * largest_scale};
+}
+
+bool Renderer::Impl::InFrustum(const DrawItem& item, const std::array<Eigen::Vector4f, 6>& planes) const {
+  const auto [center, radius] = WorldSphere(item);
   return std::all_of(planes.begin(), planes.end(),
                      [&](const Eigen::Vector4f& plane) { return plane.head<3>().dot(center) + plane.w() >= -radius; });
 }
@@ -396,7 +391,8 @@ int Renderer::Impl::Nearest(std::size_t count, Position position, const Eigen::V
   return nearest;
 }
 
-ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<const DrawItem> items) {
+ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<const DrawItem> items,
+                                           const std::array<Eigen::Vector4f, 6>& view_planes) {
   if (!shadow_map) shadow_map = std::make_unique<ShadowMap>(kShadowMapSize, kShadowRadiusM);
   const Eigen::Matrix4f clip_from_world = shadow_map->Fit(camera, look.to_sun);
   const auto planes = FrustumPlanes(clip_from_world);
@@ -408,6 +404,11 @@ ShadowSampling Renderer::Impl::DrawShadows(const CameraView& camera, std::span<c
       if (item.fixed != fixed || item.mesh >= meshes.size() || meshes[item.mesh].flat_ground ||
           !InFrustum(item, planes)) {
         continue;
+      }
+      // The fixed casters' depth is kept for other views; a moving caster is drawn for this one only.
+      if (!fixed) {
+        const auto [centre, radius] = WorldSphere(item);
+        if (!ShadowCanReach(centre, radius, look.to_sun, view_planes)) continue;
       }
       glUniformMatrix4fv(u_model, 1, GL_FALSE, item.world_from_model.data());
       DrawMesh(MeshFor(item));
@@ -561,13 +562,15 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
            (gl.look.variation != 0 ? ChannelProgram::kVariation : 0u);
   };
   glBindVertexArray(gl.vertex_array);
-  ShadowSampling shadow;
-  if (full_rgb && gl.look.shadows) shadow = gl.DrawShadows(camera, items);
-  const Impl::Pass pass{
+  Impl::Pass pass{
       camera, RigidInverse(camera.world_from_camera),
       Perspective(lens ? WidenedFov(camera.fov_y_deg, widening) : camera.fov_y_deg,
                   static_cast<float>(camera.width) / static_cast<float>(camera.height), camera.near_m, camera.far_m),
-      shadow};
+      {}};
+  if (full_rgb && gl.look.shadows) {
+    pass.shadow = gl.DrawShadows(camera, items, FrustumPlanes(pass.projection * pass.view));
+  }
+  const ShadowSampling& shadow = pass.shadow;
   uint32_t rgb_look = material_look(planes);
   if (full_rgb) {
     rgb_look |= (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |

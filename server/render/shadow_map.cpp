@@ -1,5 +1,6 @@
 #include "server/render/shadow_map.h"
 
+#include <algorithm>
 #include <cmath>
 #include <Eigen/Geometry>
 #include <stdexcept>
@@ -48,6 +49,20 @@ void MakeDepthTarget(GLsizei size, GLuint& texture, GLuint& framebuffer) {
 }
 
 }  // namespace
+
+bool ShadowCanReach(const Eigen::Vector3f& centre, float radius, const Eigen::Vector3f& to_sun,
+                    const std::array<Eigen::Vector4f, 6>& view_planes) {
+  // The margin covers a texel's footprint (0.18 m diagonal at 512 texels over 64 m),
+  // the sampling's 0.06 m normal offset and rounding.
+  constexpr float kMarginM = 0.5f;
+  constexpr float kLowestReceiverZ = -5.0f;  // below any ground a map has
+  if (to_sun.z() < 0.02f) return true;       // shadows without end
+  const Eigen::Vector3f end = centre - to_sun * (std::max(centre.z() - kLowestReceiverZ, 0.0f) / to_sun.z());
+  return std::all_of(view_planes.begin(), view_planes.end(), [&](const Eigen::Vector4f& plane) {
+    const float farthest_inside = std::max(plane.head<3>().dot(centre), plane.head<3>().dot(end)) + plane.w();
+    return farthest_inside >= -(radius + kMarginM);
+  });
+}
 
 ShadowMap::ShadowMap(GLsizei size, float radius_m) : size_(size), radius_m_(radius_m) {
   MakeDepthTarget(size_, texture_, framebuffer_);

@@ -24,6 +24,17 @@
 
 namespace sim4cv::render {
 
+// Whether a caster inside the sphere (centre, radius) can shadow anything inside the
+// frustum `view_planes` (camera_math.h's FrustumPlanes) under the sun `to_sun` (unit,
+// world). A caster darkens only what lies on the sun's rays through it beyond it: the
+// sphere swept away from the sun down to below any ground. Where that capsule is
+// wholly outside one plane of the view, no pixel of the view samples a texel the
+// caster would write (what lies between it and the sun is lit either way), so leaving
+// the caster out of the map changes no pixel. Conservative: true may still mean no
+// shadow in view; a sun at the horizon always gives true.
+bool ShadowCanReach(const Eigen::Vector3f& centre, float radius, const Eigen::Vector3f& to_sun,
+                    const std::array<Eigen::Vector4f, 6>& view_planes);
+
 class ShadowMap {
  public:
   // size: texels on a side; radius_m: half the side of the square of ground covered.

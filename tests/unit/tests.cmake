@@ -38,6 +38,7 @@ sim4cv_test(unit logdraw_test sim4cv_runlog sim4cv_map ${OpenCV_LIBS})
 target_compile_definitions(logdraw_test PRIVATE SIM4CV_SOURCE_DIR="${PROJECT_SOURCE_DIR}" SIM4CV_LOGDRAW_PATH="$<TARGET_FILE:sim4cv_logdraw>")
 add_dependencies(logdraw_test sim4cv_logdraw)  # the test runs the tool
 sim4cv_test(unit projection_test sim4cv_render)
+sim4cv_test(unit shadow_reach_test sim4cv_render)
 sim4cv_test(unit object_catalog_test sim4cv_daemon)
 sim4cv_test(unit tcp_reply_test sim4cv_transport sim4cv_client)
 sim4cv_test(unit udp_reply_test sim4cv_transport sim4cv_client)
