@@ -127,3 +127,20 @@ def test_smoke_offline(tmp_path):
     assert len(records) == 8 and all(r["tracker_fps"] > 0 and r["fps_per_frame"] > 0 for r in records)
     again = run_cli("experiments/smoke_offline.yaml", "--out", str(out), "--jobs", "1")
     assert again.returncode == 0 and again.stderr.count("skipped (done before)") == 8
+
+
+def test_report_of_repetitions_with_equal_completions(tmp_path):
+    """Three real-time runs that all ended at 0.094: their mean rounds to
+    0.09400000000000001, and the plot's min-max bars must not go negative
+    (the paper-scale study's gather failed there)."""
+    from sim4cv import experiment_report
+    base = {"kind": "online", "map": "tracking/easy_urban", "speed": 4.0, "tracker": "opencv:mosse",
+            "mode": "realtime", "fps": 30.0, "delay_ms": 0.0, "conditions": "", "uav": 0, "wall_s": 1.0,
+            "completion": 0.094, "frames_processed": 10, "frames_skipped": 0, "tracker_fps": 100.0,
+            "mean_center_error_px": 1.0, "median_center_error_px": 1.0, "mean_distance_m": 1.0, "seconds": 1.0,
+            "lost": True, "error": "", "deviation_from_gt_m": 1.0}
+    records = [dict(base, run="r%d" % i, repetition=i) for i in (1, 2, 3)]
+    exp = {"name": "equal", "kind": "online", "trackers": ["opencv:mosse"], "seconds": 1.0}
+    experiment_report.write_all(exp, records, str(tmp_path), "test", 1.0)
+    assert (tmp_path / "plots" / "completion.png").stat().st_size > 0
+    assert "| tracking/easy_urban | 4 | opencv:mosse | realtime |" in (tmp_path / "report.md").read_text()

@@ -94,8 +94,9 @@ def completion_plots(records, trackers, plots_dir):
                         and not math.isnan(r["completion"])]
                 m = statistics.fmean(vals) if vals else 0.0
                 means.append(m)
-                lo.append(m - min(vals) if vals else 0.0)
-                hi.append(max(vals) - m if vals else 0.0)
+                # at least 0: the mean of equal values can round a bit past them (fmean([0.094] * 3) > 0.094)
+                lo.append(max(m - min(vals), 0.0) if vals else 0.0)
+                hi.append(max(max(vals) - m, 0.0) if vals else 0.0)
             xs = [i + (k - (len(trackers) - 1) / 2) * width for i in range(len(groups))]
             ax.bar(xs, means, width, yerr=[lo, hi], capsize=3, label=t)
         ax.set_xticks(range(len(groups)))
