@@ -14,6 +14,7 @@ import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "clients" / "python"))
 from sim4cv.experiment_report import summary_rows  # noqa: E402
+from sim4cv.tasks_gather import NOT_RUN  # noqa: E402
 
 
 def cells(out_dir, mode):
@@ -21,7 +22,7 @@ def cells(out_dir, mode):
     ran (a study gathered part way has records for its missing tasks too); and how many did not."""
     with open(pathlib.Path(out_dir) / "results.json") as f:
         records = [r for r in json.load(f) if r["mode"] == mode]
-    ran = [r for r in records if not r["error"].startswith("missing:")]
+    ran = [r for r in records if not r["error"].startswith(NOT_RUN)]
     return {(r["map"], r["speed"], r["tracker"]): r for r in summary_rows(ran)}, len(records) - len(ran)
 
 

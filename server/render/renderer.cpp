@@ -570,10 +570,9 @@ void Renderer::Render(const CameraView& camera, std::span<const DrawItem> items,
   if (full_rgb && gl.look.shadows) {
     pass.shadow = gl.DrawShadows(camera, items, FrustumPlanes(pass.projection * pass.view));
   }
-  const ShadowSampling& shadow = pass.shadow;
   uint32_t rgb_look = material_look(planes);
   if (full_rgb) {
-    rgb_look |= (shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
+    rgb_look |= (pass.shadow.texture != 0 ? ChannelProgram::kShadows : 0u) |
                 (gl.look.noise_read > 0.0f || gl.look.noise_shot > 0.0f ? ChannelProgram::kNoise : 0u) |
                 (gl.look.lights > 0.0f && !(gl.lamps.empty() && gl.headlights.empty()) ? ChannelProgram::kLamps : 0u);
   }

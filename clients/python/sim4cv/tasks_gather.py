@@ -10,6 +10,13 @@ from . import experiment as ex
 from . import experiment_offline as off
 from . import tasks as tk
 
+# The error of the record that stands for a task not run yet (a study gathered part way).
+NOT_RUN = "missing: "
+
+
+def _not_run(index):
+    return NOT_RUN + "task %d has not run" % index
+
 
 def _online_records(out_dir, st):
     records = []
@@ -17,7 +24,7 @@ def _online_records(out_dir, st):
         run = t["run"]
         summary = ex._read_session(os.path.join(out_dir, "runs", t["name"], "session.json"))
         if summary is None:
-            error = st["failed"].get(t["index"], "missing: task %d has not run" % t["index"])
+            error = st["failed"].get(t["index"], _not_run(t["index"]))
             summary = {"results": [{"tracker": s, "lost": True, "error": error} for s in run["session"]["trackers"]]}
         records += ex.online_records(run, summary)
     ex.add_gt_deviation(records, out_dir)
@@ -33,7 +40,7 @@ def _offline_records(exp, out_dir, st, say):
             *_, frames, seconds, error, _, _ = off.score_one(tuple(t["work"]))
         else:
             frames, seconds = 0, 0.0
-            error = st["failed"].get(t["index"], "missing: task %d has not run" % t["index"])
+            error = st["failed"].get(t["index"], _not_run(t["index"]))
         records.append(off.score_record(tuple(t["work"]), frames, seconds, error))
     root = off.sequences_root(exp, out_dir)
     try:
