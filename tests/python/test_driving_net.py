@@ -97,6 +97,29 @@ def test_onnx_opencv_matches_torch(tmp_path, h, w, use_goal):
         np.testing.assert_allclose(out, ref, atol=1e-4, rtol=0)
 
 
+def test_image_normalisation_sees_a_darker_image_as_the_same_road_in_torch_and_opencv(tmp_path):
+    torch.manual_seed(0)
+    model = dn.WaypointNet(90, 160, use_goal=True, input_norm="image").eval()
+    rng = np.random.RandomState(4)
+    img = rng.randint(40, 216, (90, 160, 3), dtype=np.uint8)
+    dark = (img.astype(np.float32) * 0.3 + 5).astype(np.uint8)   # night: a third of the light
+    x = torch.from_numpy(np.stack([img, dark]).transpose(0, 3, 1, 2).astype(np.float32))
+    with torch.no_grad():
+        ref = model(x, torch.tensor([[1.0], [1.0]])).numpy()
+    np.testing.assert_allclose(ref[0], ref[1], atol=2e-3, rtol=0)
+    fixed = dn.WaypointNet(90, 160, use_goal=True).eval()
+    fixed.load_state_dict({k: v for k, v in model.state_dict().items() if not k.startswith("norm.")})
+    with torch.no_grad():
+        seen = fixed(x, torch.tensor([[1.0], [1.0]])).numpy()
+    assert np.abs(seen[0] - seen[1]).max() > 10 * np.abs(ref[0] - ref[1]).max()
+    path = str(tmp_path / "image_norm.onnx")
+    dn.export_onnx(model, path)
+    run = dn.load_onnx_with_opencv(path, use_goal=True)
+    np.testing.assert_allclose(run(img, 1.0), ref[0], atol=1e-4, rtol=0)
+    with pytest.raises(ValueError, match="input_norm 'batch' is not one of fixed, image"):
+        dn.WaypointNet(90, 160, input_norm="batch")
+
+
 def test_onnx_contract(tmp_path):
     pytest.importorskip("onnx")
     path = str(tmp_path / "net.onnx")

@@ -132,7 +132,7 @@ def test_training_goes_on_from_a_model_and_refuses_another_size(dataset, tmp_pat
     second = dt.load_model(str(tmp_path / "second" / "model.pt"))
     for a, b in zip(start.state_dict().values(), second.state_dict().values()):
         assert torch.allclose(a, b, atol=1e-6)
-    with pytest.raises(dt.TrainError, match=r"--init .* was trained at 90x160 goal=False, not 180x320 goal=False"):
+    with pytest.raises(dt.TrainError, match=r"--init .* was trained at 90x160 goal=False input norm fixed, not 180x320 goal=False"):
         dt.train(str(dataset), str(dataset), str(tmp_path / "third"), epochs=1, downscale=1,
                  init=str(first / "model.pt"), log=lambda *a: None)
 
@@ -145,9 +145,26 @@ def test_a_goal_model_starts_from_a_lane_model_with_the_same_outputs(dataset, tm
     lane, guided = dt.load_model(str(first / "model.pt")), dt.load_model(str(tmp_path / "goal" / "model.pt"))
     image = torch.rand(2, 3, 90, 160) * 255
     assert torch.allclose(lane(image), guided(image, torch.tensor([[1.0], [-1.0]])), atol=1e-4)
-    with pytest.raises(dt.TrainError, match="goal=True, not 90x160 goal=False"):
+    with pytest.raises(dt.TrainError, match="goal=True input norm fixed, not 90x160 goal=False"):
         dt.train(str(dataset), str(dataset), str(tmp_path / "back"), epochs=1, downscale=2,
                  init=str(tmp_path / "goal" / "model.pt"), log=lambda *a: None)
+
+
+def test_an_image_normalised_model_starts_from_a_fixed_one_and_its_card_says_so(dataset, tmp_path):
+    first = tmp_path / "first"
+    dt.train(str(dataset), str(dataset), str(first), epochs=1, batch=8, downscale=2, threads=2, log=lambda *a: None)
+    out = tmp_path / "robust"
+    meta = dt.train(str(dataset), str(dataset), str(out), epochs=1, batch=8, lr=1e-12, downscale=2, threads=2,
+                    init=str(first / "model.pt"), input_norm="image", augment=1.0, log=lambda *a: None)
+    assert meta["settings"]["input_norm"] == "image" and meta["settings"]["augment"] == 1.0
+    assert "input_norm" not in json.load(open(first / "training.json"))["settings"]  # the default is not recorded
+    robust = dt.load_model(str(out / "model.pt"))
+    assert robust.input_norm == "image"
+    assert torch.allclose(robust.norm.weight, torch.full((3,), dn.IMAGE_NORM_SCALE))
+    assert "InstanceNormalization" in dcard.read(str(out / "model.onnx"))["input"]["normalisation"]
+    with pytest.raises(dt.TrainError, match="input norm image, not 90x160 goal=False input norm fixed"):
+        dt.train(str(dataset), str(dataset), str(tmp_path / "back"), epochs=1, downscale=2,
+                 init=str(out / "model.pt"), log=lambda *a: None)
 
 
 def test_kept_epochs_average_into_one_model_with_the_mean_weights(dataset, tmp_path):

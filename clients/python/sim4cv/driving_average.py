@@ -47,7 +47,7 @@ def average(paths: Sequence[str], out: str, log=print) -> dict:
     _save(os.path.join(out, "model.pt"), state, settings, 0)
     model = load_model(os.path.join(out, "model.pt"))
     export_onnx(model, os.path.join(out, "model.onnx"), model.height, model.width)
-    driving_card.write(out, model.height, model.width, model.use_goal)  # a new network: not selected yet
+    driving_card.write(out, model.height, model.width, model.use_goal, model.input_norm)  # a new network: not selected yet
     meta = dict(models=settings["averaged"], height=model.height, width=model.width, goal=model.use_goal,
                 outputs=["model.pt", "model.onnx", "model.json", "average.json"])
     with open(os.path.join(out, "average.json"), "w") as f:

@@ -108,15 +108,16 @@ def describe(args, sources: Dict[str, str]) -> str:
 
 
 def card_for(height: int, width: int, use_goal: bool, controller: Optional[dict] = None,
-             selected: Optional[dict] = None) -> dict:
+             selected: Optional[dict] = None, input_norm: str = "fixed") -> dict:
     """A card's content: the network's contract (docs/driving.md, "ONNX
     contract") and the controller (default: the paper's rule, not selected)."""
     from .driving_dataset import CAMERA_SETTINGS
+    from .driving_net import NORMALISATIONS
     return {
         "format": FORMAT,
         "files": {"onnx": "model.onnx", "torch": "model.pt", "training": "training.json"},
         "input": {"height": height, "width": width, "channels": "RGB", "layout": "NCHW", "dtype": "float32",
-                  "value_range": [0, 255], "normalisation": "x / 255 - 0.5, inside the network",
+                  "value_range": [0, 255], "normalisation": NORMALISATIONS[input_norm],
                   "resize": "cv2.INTER_AREA from the camera's image", "goal": bool(use_goal),
                   "camera": dict(CAMERA_SETTINGS)},
         "output": {"names": OUTPUTS, "unit": "m", "axes": "v forward, h positive to the right",
@@ -126,11 +127,11 @@ def card_for(height: int, width: int, use_goal: bool, controller: Optional[dict]
     }
 
 
-def write(folder: str, height: int, width: int, use_goal: bool) -> str:
+def write(folder: str, height: int, width: int, use_goal: bool, input_norm: str = "fixed") -> str:
     """Writes folder/model.json for a freshly trained network; returns its path."""
     path = os.path.join(folder, CARD_NAME)
     with open(path, "w") as f:
-        json.dump(card_for(height, width, use_goal), f, indent=2)
+        json.dump(card_for(height, width, use_goal, input_norm=input_norm), f, indent=2)
         f.write("\n")
     return path
 

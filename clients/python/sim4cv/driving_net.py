@@ -9,9 +9,12 @@ metres, the order of labels.csv) from one RGB image, optionally given a goal
     run = load_onnx_with_opencv("net.onnx")
     waypoints = run(rgb_uint8_hxwx3)    # numpy (8,): v1 h1 v2 h2 v3 h3 v4 h4
 
-The input normalisation (x / 255 - 0.5) is inside the model, so the ONNX
-file takes raw RGB values as float32 and needs no preprocessing but the
-HWC -> CHW transpose.
+The input normalisation is inside the model, so the ONNX file takes raw RGB
+values as float32 and needs no preprocessing but the HWC -> CHW transpose:
+"fixed" (x / 255 - 0.5, the shipped model) or "image" (each image's channels
+brought to zero mean and unit spread, then a learned scale and offset: an
+InstanceNormalization, which makes a dark night frame and a bright noon frame
+of the same road look alike to the convolutions).
 
 Needs torch (python3-torch); load_onnx_with_opencv needs only cv2 and numpy.
 """
@@ -38,6 +41,17 @@ CONV_LAYERS = ((24, 5, 2), (36, 5, 2), (48, 5, 2), (64, 3, 1), (64, 3, 1))
 POOL_SIZE = (2, 4)  # rows, columns of the adaptive pooling before the FC layers
 HIDDEN = 100
 INPUT_NAME, GOAL_NAME, OUTPUT_NAME = "image", "goal", "waypoints"
+# the input normalisations and the model card's words for them
+NORMALISATIONS = {
+    "fixed": "x / 255 - 0.5, inside the network",
+    "image": "per image and channel (x - mean) / std, then a learned scale and offset "
+             "(ONNX InstanceNormalization), inside the network",
+}
+# "image": the scale the learned one starts at, the spread of x / 255 - 0.5 on a
+# clear-noon frame, so a network trained with "fixed" starts out nearly the same
+IMAGE_NORM_SCALE = 0.16
+# "image": added to the variance (0 ... 255 units) so a uniform image stays finite
+IMAGE_NORM_EPS = 1.0
 ONNX_OPSET = 11
 
 
@@ -70,7 +84,7 @@ if nn is not None:
         (64*2*4 [+1 goal] -> 100, ReLU -> 8).
 
         Input: N x 3 x H x W float RGB in the uint8 range (0 ... 255),
-        normalised inside as x / 255 - 0.5. `height`, `width` only choose the
+        normalised inside (NORMALISATIONS[input_norm]). `height`, `width` only choose the
         default size recorded for export; any size whose last feature map
         has at least 2 x 4 cells works (e.g. 180x320 and 90x160).
         With use_goal, forward takes `goal` (N or N x 1: -1 left, 0 straight,
@@ -78,8 +92,15 @@ if nn is not None:
         FC layer; a missing goal counts as 0."""
 
         def __init__(self, height: int = DEFAULT_HEIGHT, width: int = DEFAULT_WIDTH, use_goal: bool = False,
-                     hidden: int = HIDDEN, outputs: int = OUTPUTS):
+                     hidden: int = HIDDEN, outputs: int = OUTPUTS, input_norm: str = "fixed"):
             super().__init__()
+            if input_norm not in NORMALISATIONS:
+                raise ValueError("WaypointNet: input_norm %r is not one of %s" % (input_norm, ", ".join(NORMALISATIONS)))
+            self.input_norm = input_norm
+            if input_norm == "image":
+                self.norm = nn.InstanceNorm2d(3, affine=True, eps=IMAGE_NORM_EPS)
+                nn.init.constant_(self.norm.weight, IMAGE_NORM_SCALE)
+                nn.init.zeros_(self.norm.bias)
             fh, fw = conv_output_size(height, width)
             pool_window(fh, POOL_SIZE[0])
             pool_window(fw, POOL_SIZE[1])
@@ -99,7 +120,7 @@ if nn is not None:
         def encode(self, image):
             """The convolutions and the pooling: N x (64*2*4) features, what
             the fully connected layers see (driving_head trains those alone)."""
-            x = image / 255.0 - 0.5
+            x = self.norm(image) if self.input_norm == "image" else image / 255.0 - 0.5
             x = self.features(x)
             kh, sh = pool_window(int(x.shape[2]), POOL_SIZE[0])
             kw, sw = pool_window(int(x.shape[3]), POOL_SIZE[1])
@@ -138,6 +159,8 @@ if nn is not None:
             with torch.no_grad(), warnings.catch_warnings():
                 # the pooling's window sizes are fixed at export: that is the contract (fixed shapes)
                 warnings.simplefilter("ignore", torch.jit.TracerWarning)
+                # an InstanceNorm exports as what it is, normalisation by the image's own statistics
+                warnings.filterwarnings("ignore", message=".*operator 'instance_norm' is set to train=True")
                 torch.onnx.export(model, args, path, opset_version=ONNX_OPSET, input_names=names,
                                   output_names=[OUTPUT_NAME], do_constant_folding=True)
         finally:

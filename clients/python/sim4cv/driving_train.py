@@ -5,6 +5,7 @@ on datasets written by sim4cv.driving_dataset.
         [--epochs N] [--batch 32] [--lr 5e-5] [--patience 5] [--downscale 2] \\
         [--goal] [--max-samples N] [--threads N] [--max-minutes M] [--force]
         [--init MODEL.pt] [--junction-weight K] [--obstacle-weight K] [--keep-epochs]
+        [--input-norm fixed|image] [--augment STRENGTH]
 
 L2 (MSE) loss on the 8 offsets v1 h1 ... v4 h4, Adam, the validation loss
 after every epoch, early stopping on it (the best state is kept). Writes
@@ -32,14 +33,15 @@ import torch
 from torch.utils.data import ConcatDataset, DataLoader, Dataset, WeightedRandomSampler
 
 from sim4cv import driving_card
+from sim4cv.driving_augment import condition_augment
 from sim4cv.driving_weights import load_saved
-from sim4cv.driving_net import DEFAULT_HEIGHT, DEFAULT_WIDTH, WaypointNet, export_onnx
+from sim4cv.driving_net import DEFAULT_HEIGHT, DEFAULT_WIDTH, NORMALISATIONS, WaypointNet, export_onnx
 
 TARGETS = ["v1", "h1", "v2", "h2", "v3", "h3", "v4", "h4"]
 REQUIRED = ["image"] + TARGETS + ["goal"]
 # the settings that make two models different (a rerun with other ones is refused unless --force)
 MODEL_SETTINGS = ("train", "val", "epochs", "batch", "lr", "patience", "downscale", "goal", "max_samples",
-                  "junction_weight", "obstacle_weight")
+                  "junction_weight", "obstacle_weight", "input_norm", "augment")
 # relabel's 0/1 columns that --junction-weight and --obstacle-weight oversample
 WEIGHTED = ("junction", "obstacle")
 
@@ -187,7 +189,7 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
           patience: int = 5, downscale: int = 2, goal: bool = False, max_samples: int = 0,
           threads: int = 0, force: bool = False, seed: int = 0, max_minutes: float = 0.0, init: str = "",
           junction_weight: float = 1.0, obstacle_weight: float = 1.0, keep_epochs: bool = False,
-          log=print) -> dict:
+          input_norm: str = "fixed", augment: float = 0.0, log=print) -> dict:
     if downscale not in (1, 2):
         raise TrainError("--downscale must be 1 (180x320) or 2 (90x160), got %d" % downscale)
     weights = {"junction": junction_weight, "obstacle": obstacle_weight}
@@ -199,6 +201,11 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
                     lr=lr, patience=patience, downscale=downscale, goal=goal, max_samples=max_samples,
                     threads=threads, seed=seed)
     record_weights(settings, weights)
+    # recorded only when not the default, so older models' settings still match
+    settings.update({k: v for k, v in (("input_norm", input_norm), ("augment", augment))
+                     if v != {"input_norm": "fixed", "augment": 0.0}[k]})
+    if input_norm not in NORMALISATIONS:
+        raise TrainError("--input-norm %s: one of %s" % (input_norm, ", ".join(NORMALISATIONS)))
     parts = [DrivingDataset(d, downscale, max_samples) for d in train_dirs]
     train_set = parts[0] if len(parts) == 1 else ConcatDataset(parts)
     train_set.height, train_set.width = parts[0].height, parts[0].width
@@ -213,18 +220,21 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
     torch.manual_seed(seed)
     height, width = train_set.height, train_set.width
     settings.update(height=height, width=width, train_samples=len(train_set), val_samples=len(val_set))
-    model = WaypointNet(height, width, use_goal=goal)
+    model = WaypointNet(height, width, use_goal=goal, input_norm=input_norm)
     if init:  # go on from a trained model (e.g. one whose time budget ran out)
         try:
             start = load_model(init)
         except (OSError, KeyError, RuntimeError) as e:
             raise TrainError("--init %s: not a model.pt of this trainer (%s)" % (init, e))
-        if (start.height, start.width) != (height, width) or (start.use_goal and not goal):
-            raise TrainError("--init %s was trained at %dx%d goal=%s, not %dx%d goal=%s" % (
-                init, start.height, start.width, start.use_goal, height, width, goal))
+        if ((start.height, start.width) != (height, width) or (start.use_goal and not goal)
+                or (start.input_norm == "image" and input_norm != "image")):
+            raise TrainError("--init %s was trained at %dx%d goal=%s input norm %s, not %dx%d goal=%s input norm %s" % (
+                init, start.height, start.width, start.use_goal, start.input_norm, height, width, goal, input_norm))
         state = start.state_dict()
         if goal and not start.use_goal:  # the goal's weights into fc1 start at 0: the old model's outputs
             state["fc1.weight"] = torch.cat([state["fc1.weight"], torch.zeros(state["fc1.weight"].shape[0], 1)], 1)
+        if input_norm != start.input_norm:  # "fixed" -> "image": the new normalisation keeps its starting scale
+            state.update({k: v for k, v in model.state_dict().items() if k.startswith("norm.")})
         model.load_state_dict(state)
         settings["init"] = os.path.abspath(init)
     opt = torch.optim.Adam(model.parameters(), lr=lr)
@@ -242,6 +252,8 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
         model.train()
         total, n = 0.0, 0
         for image, g, target in train_loader:
+            if augment > 0:
+                image = condition_augment(image, augment)
             opt.zero_grad()
             outp = model(image, g) if goal else model(image)
             loss = torch.nn.functional.mse_loss(outp, target)
@@ -291,7 +303,7 @@ def _write(out, model, best_state, settings, history, best_epoch, best, epochs, 
     _save(os.path.join(out, "model.pt"), best_state, settings, best_epoch)
     export_onnx(snapshot, os.path.join(out, "model.onnx"), settings["height"], settings["width"])
     # a new network: its card has the paper's controller until one is chosen in closed loop
-    driving_card.write(out, settings["height"], settings["width"], settings["goal"])
+    driving_card.write(out, settings["height"], settings["width"], settings["goal"], settings.get("input_norm", "fixed"))
     meta = dict(settings=settings, epochs=history, best_epoch=best_epoch, best_val_loss=best, finished=finished,
                 stopped_early=finished and len(history) < epochs,
                 samples_per_s=(sum(e["train_samples_per_s"] or 0 for e in history) / len(history)),
@@ -315,7 +327,7 @@ def load_model(path: str) -> WaypointNet:
 def model_from(saved: dict) -> WaypointNet:
     """The WaypointNet (eval mode) of a loaded model.pt's contents."""
     s = saved["settings"]
-    model = WaypointNet(s["height"], s["width"], use_goal=s["goal"])
+    model = WaypointNet(s["height"], s["width"], use_goal=s["goal"], input_norm=s.get("input_norm", "fixed"))
     model.load_state_dict(saved["state_dict"])
     return model.eval()
 
@@ -359,12 +371,17 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--max-minutes", type=float, default=0.0,
                    help="stop after the epoch that passes this much training time (0: no limit)")
     p.add_argument("--init", default="", help="start from this model.pt's weights instead of random ones")
+    p.add_argument("--input-norm", default="fixed", choices=tuple(NORMALISATIONS),
+                   help="fixed: x / 255 - 0.5; image: each image's own mean and spread (InstanceNormalization)")
+    p.add_argument("--augment", type=float, default=0.0,
+                   help="condition augmentation's strength (sim4cv.driving_augment; 0: off, 1: its full ranges)")
     a = p.parse_args(argv)
     return refusing(lambda: train(
         a.train, a.val, a.out, epochs=a.epochs, batch=a.batch, lr=a.lr, patience=a.patience, downscale=a.downscale,
         goal=a.goal, max_samples=a.max_samples, threads=a.threads, force=a.force, seed=a.seed,
         max_minutes=a.max_minutes, init=a.init, junction_weight=a.junction_weight,
-        obstacle_weight=a.obstacle_weight, keep_epochs=a.keep_epochs, log=lambda m: print(m, flush=True)))
+        obstacle_weight=a.obstacle_weight, keep_epochs=a.keep_epochs, input_norm=a.input_norm, augment=a.augment,
+        log=lambda m: print(m, flush=True)))
 
 
 if __name__ == "__main__":
