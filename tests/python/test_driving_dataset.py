@@ -199,3 +199,27 @@ def test_narrow_ranges_render_views_near_the_lane(tmp_path):
     # a dataset of other ranges is another dataset
     with pytest.raises(dd.DatasetError, match="other settings"):
         _generate(tmp_path / "near", offset_range=0.25, yaw_range=5.0)
+
+
+def test_an_ego_car_under_each_view_lights_the_road_at_night_as_in_closed_loop(tmp_path):
+    import cv2
+    # straight-on views at night, without and with the car under the camera
+    plain = _generate(tmp_path / "plain", views="none", max_samples=3, conditions="night")
+    lit = _generate(tmp_path / "lit", views="none", max_samples=3, conditions="night", ego_car=True)
+    assert "ego_car" not in plain["settings"] and lit["settings"]["ego_car"] is True
+    assert lit["maps"]["driving_val_01_desert"]["views_inside_parked_cars"] == 0
+    for i in range(3):
+        dark, bright = (cv2.imread(str(tmp_path / d / "images" / "driving_val_01_desert" / ("%06d.png" % i)))
+                        for d in ("plain", "lit"))
+        road = (slice(100, 180), slice(100, 220))  # the road ahead, where the headlights fall
+        assert bright[road].mean() > dark[road].mean() + 15, i
+        sky = (slice(0, 40), slice(None))
+        assert abs(float(bright[sky].mean()) - float(dark[sky].mean())) < 1
+    # with parked cars: no view where the car would stand inside one, and the passing views are kept
+    parked = _generate(tmp_path / "parked", views="random", random_views=3, max_samples=0, obstacles=2,
+                       straight_step=4.0, turn_step=4.0, ego_car=True,
+                       maps=[os.path.join(REPO_ROOT, "scenes", "driving", "test", "01_urban.map")],
+                       surroundings=["urban"])
+    counts = parked["maps"]["driving_test_01_urban"]
+    assert counts["obstacles"] == 2 and counts["views_inside_parked_cars"] >= 1
+    assert counts["images"] == 4 * counts["samples"] - counts["views_inside_parked_cars"]

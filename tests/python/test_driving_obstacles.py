@@ -55,6 +55,19 @@ def test_the_ideal_path_shifts_by_hand_computed_amounts():
     assert shifted.deviation(o, 0.0) == pytest.approx(4.0)   # in its own lane: 4 m right of it
 
 
+def test_two_car_footprints_overlap_only_where_they_touch():
+    assert dob.cars_overlap((0, 0, 0), (4.4, 0, 0))                   # nose to tail, 10 cm into each other
+    assert not dob.cars_overlap((0, 0, 0), (4.6, 0, 0))
+    assert not dob.cars_overlap((0, 0, 0), (0, 1.9, 0))               # side by side, 10 cm apart
+    assert dob.cars_overlap((0, 0, 0), (0, 1.9, 0), margin=0.1)       # ... not with 10 cm more on each side
+    assert not dob.cars_overlap((0, 0, 0), (3.2, 0, math.pi / 2))     # across its nose: 2.25 + 0.9 < 3.2
+    assert dob.cars_overlap((0, 0, 0), (3.1, 0, math.pi / 2))
+    # turned 45 degrees beside it: the corner reaches (0.9 + 2.25) / sqrt(2) = 2.23 m towards it
+    assert dob.cars_overlap((0, 0, 0), (0, 0.9 + 2.2, math.pi / 4))
+    assert not dob.cars_overlap((0, 0, 0), (0, 0.9 + 2.3, math.pi / 4))
+    assert not dob.cars_overlap((0, 0, 0), (0, dob.LANE_SHIFT_M, 0), margin=0.2)  # passing in the left lane
+
+
 def test_dataset_labels_pass_the_obstacles(tmp_path):
     info, path = lane()
     dd.generate([MAP], ["urban"], str(tmp_path), views="none", straight_step=6.0, turn_step=6.0, obstacles=2,

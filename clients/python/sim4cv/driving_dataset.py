@@ -37,6 +37,11 @@ CAMERA = "dataset_cam"
 # placed where car_front would be for a car standing at the view's pose.
 CAMERA_SETTINGS = {"name": "car_front", "width": 320, "height": 180, "fov_y_deg": 60.0, "pitch_down_deg": 5.0,
                    "forward_m": 2.35, "above_body_m": 0.3}
+# --ego-car: the car spawned under each view (its headlights light the road ahead at dusk and
+# night, as the driven car's do in closed loop), and the gap it keeps to a parked car (closer,
+# the two would overlap and physics would shove one of them)
+EGO_NAME = "ego"
+EGO_CLEARANCE_M = 0.2
 BODY_HEIGHT_M = 0.8774  # the car's body centre above the ground at rest (when the map has no car to measure)
 WAYPOINT_STEP_M = 2.0
 WAYPOINT_COUNT = 4
@@ -309,6 +314,9 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
     os.makedirs(img_dir)
     part_path = os.path.join(out, "parts", name + ".csv")
     counts = {"samples": 0, "images": 0, "junction_turns": 0, "max_lane_error_m": 0.0, "obstacles": 0}
+    ego_car = bool(settings.get("ego_car"))
+    if ego_car:
+        counts["views_inside_parked_cars"] = 0
     t0 = time.monotonic()
     flags = ["--map", path, "--traffic-cars", "0", "--traffic-parked", "0", "--traffic-pedestrians", "0"]
     if settings.get("conditions"):
@@ -338,7 +346,8 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
             lane = RoutePath(info, route)
             # cars parked in the lane; the ideal path passes them in the left lane
             ideal = dob.ShiftedPath.placed(lane, settings.get("obstacles", 0), settings["seed"], name)
-            for ox, oy, oyaw in ideal.obstacle_poses():
+            parked = ideal.obstacle_poses()
+            for ox, oy, oyaw in parked:
                 client.spawn("car", dob.OBSTACLE_NAME % counts["obstacles"], ox, oy, 0.0, math.degrees(oyaw))
                 counts["obstacles"] += 1
             planned = poses.get(route, []) if poses is not None else (
@@ -370,10 +379,16 @@ def generate_map(path: str, map_set: str, out: str, settings: dict, log=print, g
                     views = dl.all_views(x, y, yaw, settings["views"], rng, settings["random_views"],
                                          aug["random_offset_m"], aug["random_yaw_deg"])
                 for vx, vy, vyaw, off_m, off_deg in views:
+                    if ego_car and any(dob.cars_overlap((vx, vy, vyaw), pose, EGO_CLEARANCE_M) for pose in parked):
+                        counts["views_inside_parked_cars"] += 1  # a car cannot stand there: not rendered
+                        continue
                     client.set_camera_pose(CAMERA, vx + cam["forward_m"] * math.cos(vyaw),
                                            vy + cam["forward_m"] * math.sin(vyaw), camera_z, math.degrees(vyaw),
                                            cam["pitch_down_deg"])
+                    ego = client.spawn("car", EGO_NAME, vx, vy, 0.0, math.degrees(vyaw)) if ego_car else None
                     frame = client.step_and_receive(timeout=30.0)
+                    if ego is not None:
+                        client.remove(ego)
                     rel = os.path.join("images", name, "%06d.png" % index)
                     if not cv2.imwrite(os.path.join(out, rel), np.ascontiguousarray(frame.image("rgb")[:, :, ::-1])):
                         raise DatasetError("could not write %s" % os.path.join(out, rel))
@@ -398,7 +413,7 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
              turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0, conditions: str = "",
              randomize: int = 0, obstacles: int = 0, log=print, scenes_dir: Optional[str] = None,
              goals=None, extra_settings: Optional[dict] = None, offset_range: float = dl.RANDOM_OFFSET_M,
-             yaw_range: float = dl.RANDOM_YAW_DEG, poses=None) -> dict:
+             yaw_range: float = dl.RANDOM_YAW_DEG, poses=None, ego_car: bool = False) -> dict:
     """Generates (or resumes) the dataset in `out`; returns dataset.json's content.
     scenes_dir: where the train/val/test sets are (default scenes/driving);
     goals(map_path) -> goal_fn (generate_map's) whose summary() goes into the
@@ -406,7 +421,11 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
     compared on resume). sim4cv.driving_guided uses the three. offset_range,
     yaw_range: the random views' ranges (+-metres, +-degrees); narrow ones
     (e.g. 0.5 m, 5 deg) render the states a driving model visits near the lane.
-    poses(map_path) -> generate_map's poses: the views to render instead."""
+    poses(map_path) -> generate_map's poses: the views to render instead.
+    ego_car: a car stands under every view (spawned for the image, then
+    removed), so the image has its headlights and shadow as the driven car's
+    camera sees them; views where it would stand inside a parked car are not
+    rendered (dataset.json counts them)."""
     if views not in dl.VIEW_MODES:
         raise DatasetError("--views %s: one of %s" % (views, ", ".join(dl.VIEW_MODES)))
     if not (0 <= offset_range <= dl.RANDOM_OFFSET_M and 0 <= yaw_range <= dl.RANDOM_YAW_DEG):
@@ -424,6 +443,8 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
                          "fixed_offsets_m": list(dl.FIXED_OFFSETS_M), "fixed_yaws_deg": list(dl.FIXED_YAWS_DEG)},
         "turn": {"lookahead_m": TURN_LOOKAHEAD_M, "threshold_deg": TURN_THRESHOLD_DEG},
     }
+    if ego_car:  # recorded only when on, so datasets made before the option still resume
+        settings["ego_car"] = True
     settings.update(extra_settings or {})
     meta = check_out_dir(out, settings)
     names = [parse_map(p)["name"] for p, _ in resolved]
@@ -489,6 +510,8 @@ def main(argv=None) -> int:
     g.add_argument("--obstacles", type=int, default=0,
                    help="cars parked in the right lane per route, on straights; the labels pass them in the "
                         "left lane (default 0)")
+    g.add_argument("--ego-car", action="store_true",
+                   help="a car under every view, so its headlights light the road as in closed loop (dusk, night)")
     g.add_argument("--offset-range", type=float, default=dl.RANDOM_OFFSET_M,
                    help="random views shift sideways within +- this many metres (default %(default)s)")
     g.add_argument("--yaw-range", type=float, default=dl.RANDOM_YAW_DEG,
@@ -504,7 +527,7 @@ def main(argv=None) -> int:
     try:
         generate(args.maps, surroundings, args.out, args.views, args.random_views, args.straight_step,
                  args.turn_step, args.max_samples, args.seed, args.conditions, args.randomize,
-                 args.obstacles, offset_range=args.offset_range, yaw_range=args.yaw_range)
+                 args.obstacles, offset_range=args.offset_range, yaw_range=args.yaw_range, ego_car=args.ego_car)
     except DatasetError as e:
         print("error: %s" % e, file=sys.stderr)
         return 2

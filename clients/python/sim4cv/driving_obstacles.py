@@ -24,6 +24,25 @@ RAMP_M = 18.0        # length of each lane change
 CLEAR_M = HOLD_M + RAMP_M + 2.0
 SPACING_M = 2 * CLEAR_M + 20.0
 OBSTACLE_NAME = "obstacle_%d"
+# a car's footprint (sim4cvd's car: a 4.5 x 1.8 m chassis box), half length and half width
+CAR_HALF_LENGTH_M, CAR_HALF_WIDTH_M = 2.25, 0.9
+
+
+def cars_overlap(a: Tuple[float, float, float], b: Tuple[float, float, float], margin: float = 0.0) -> bool:
+    """Whether two cars at poses (x, y, yaw radians) overlap, each footprint
+    grown by `margin` on every side: a separating axis test on the two
+    rectangles (no axis of either separates them)."""
+    half = (CAR_HALF_LENGTH_M + margin, CAR_HALF_WIDTH_M + margin)
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    axes = [(math.cos(yaw), math.sin(yaw)) for yaw in (a[2], b[2])]
+    for ax, ay in axes + [(-s, c) for c, s in axes]:
+        reach = 0.0
+        for yaw in (a[2], b[2]):  # each rectangle's extent along the axis
+            c, s = math.cos(yaw), math.sin(yaw)
+            reach += half[0] * abs(ax * c + ay * s) + half[1] * abs(-ax * s + ay * c)
+        if abs(dx * ax + dy * ay) > reach:
+            return False
+    return True
 
 
 def _straight(path, u: float) -> bool:
