@@ -13,6 +13,9 @@ torch is missing, so the C++ test can skip. Writes into OUT_DIR:
   cv2.INTER_AREA, what WaypointModel.Predict does with a larger frame).
 * goal.onnx: WaypointNet(90, 160, use_goal=True); goal_image.bin and
   goal_out_{m1,0,p1}.bin: torch's outputs with goal -1, 0, +1.
+* image_norm.onnx: WaypointNet(90, 160, use_goal=True, input_norm="image")
+  (each image normalised by its own statistics: an InstanceNormalization
+  node); image_norm_image.bin and image_norm_out.bin (goal +1).
 * four_outputs.onnx: a tiny net with input image [1, 3, 90, 160] and output
   waypoints [1, 4]; gray_input.onnx: input image [1, 1, 90, 160], output
   waypoints [1, 8] (both to be refused).
@@ -80,6 +83,15 @@ def main(out):
     image.tofile(path("goal_image.bin"))
     for name, value in (("m1", -1.0), ("0", 0.0), ("p1", 1.0)):
         torch_out(goal, image, value).tofile(path("goal_out_%s.bin" % name))
+
+    norm = WaypointNet(90, 160, use_goal=True, input_norm="image").eval()
+    with torch.no_grad():  # a scale and offset of its own per channel, not the starting ones
+        norm.norm.weight.copy_(torch.tensor([0.1, 0.2, 0.3]))
+        norm.norm.bias.copy_(torch.tensor([0.05, -0.05, 0.0]))
+    export_onnx(norm, path("image_norm.onnx"))
+    image = (rng.integers(0, 256, size=(90, 160, 3)) * 0.3).astype(np.uint8)  # dark, as at night
+    image.tofile(path("image_norm_image.bin"))
+    torch_out(norm, image, 1.0).tofile(path("image_norm_out.bin"))
 
     export_tiny(path("four_outputs.onnx"), 3, 4)
     export_tiny(path("gray_input.onnx"), 1, 8)

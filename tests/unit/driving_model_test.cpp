@@ -130,6 +130,14 @@ TEST_F(WaypointModelTest, AGoalModelTakesTheGoal) {
   ExpectNear(model.Predict(image, 1.0f), TorchOut("goal_out_p1.bin"), "goal +1");
 }
 
+// The weather-robust model's input normalisation (an InstanceNormalization node) runs in OpenCV's DNN too.
+TEST_F(WaypointModelTest, AnImageNormalisedNetGivesTorchsOutputs) {
+  WaypointModel model(File("image_norm.onnx"));
+  EXPECT_TRUE(model.has_goal());
+  ExpectNear(model.Predict(Image("image_norm_image.bin", 90, 160), 1.0f), TorchOut("image_norm_out.bin"),
+             "image-normalised, goal +1");
+}
+
 TEST_F(WaypointModelTest, AnOutputOtherThanEightNumbersIsRefused) {
   EXPECT_EQ(Refusal(File("four_outputs.onnx")),
             "WaypointModel: '" + File("four_outputs.onnx") +
