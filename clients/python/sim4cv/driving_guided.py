@@ -578,15 +578,17 @@ def generate(maps: Sequence[str], surroundings: Sequence[str], out: str, views: 
              random_views: int = dl.DEFAULT_RANDOM_VIEWS, straight_step: Optional[float] = None,
              turn_step: Optional[float] = None, max_samples: int = 0, seed: int = 0,
              before_m: float = GOAL_BEFORE_M, log=print, offset_range: float = dl.RANDOM_OFFSET_M,
-             yaw_range: float = dl.RANDOM_YAW_DEG) -> dict:
+             yaw_range: float = dl.RANDOM_YAW_DEG, randomize: int = 0, ego_car: bool = False) -> dict:
     """driving_dataset.generate on the guided maps with a goal per lane pose
-    (MapGoals); resumes and refuses a DIR of other settings the same way."""
+    (MapGoals); resumes and refuses a DIR of other settings the same way.
+    randomize, ego_car: driving_dataset.generate's (new conditions for every
+    image; a car under every view)."""
     from .daemon import REPO_ROOT
     guided = {"goal_before_m": before_m, "goal_elsewhere": "random, seeded (crc32 of seed/map/route/u)"}
     return dd.generate(maps, surroundings, out, views, random_views, straight_step, turn_step, max_samples, seed,
                        log=log, scenes_dir=os.path.join(REPO_ROOT, GUIDED_DIR),
                        goals=lambda path: MapGoals(path, seed, before_m), extra_settings={"guided": guided},
-                       offset_range=offset_range, yaw_range=yaw_range)
+                       offset_range=offset_range, yaw_range=yaw_range, randomize=randomize, ego_car=ego_car)
 
 
 # ---------------------------------------------------------------------------
@@ -707,6 +709,9 @@ def main(argv=None) -> int:
                    help="metres before a junction from which the goal is its direction (default %(default)s)")
     g.add_argument("--offset-range", type=float, default=dl.RANDOM_OFFSET_M)
     g.add_argument("--yaw-range", type=float, default=dl.RANDOM_YAW_DEG)
+    g.add_argument("--randomize", type=int, default=0,
+                   help="domain randomisation: new conditions for every image, drawn from this seed (0: off)")
+    g.add_argument("--ego-car", action="store_true", help="a car under every view (its headlights, as in closed loop)")
 
     e = sub.add_parser("evaluate", help="closed-loop guided driving into --out/guided.json")
     e.add_argument("--model", help="OUT/model.pt or OUT/model.onnx of a --goal model (policy network)")
@@ -740,7 +745,8 @@ def main(argv=None) -> int:
         surroundings = [s for s in a.surroundings.split(",") if s]
         if a.command == "generate":
             generate(a.maps, surroundings, a.out, a.views, a.random_views, a.straight_step, a.turn_step,
-                     a.max_samples, a.seed, a.goal_before, offset_range=a.offset_range, yaw_range=a.yaw_range)
+                     a.max_samples, a.seed, a.goal_before, offset_range=a.offset_range, yaw_range=a.yaw_range,
+                     randomize=a.randomize, ego_car=a.ego_car)
             return 0
         if a.policy == "reference":
             policy = GuidedReferencePolicy()
