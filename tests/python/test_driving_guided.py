@@ -235,6 +235,24 @@ def test_a_tiny_dataset_carries_the_goals(tmp_path):
                     max_samples=12, seed=5, before_m=10.0, log=lambda *_: None)
 
 
+def test_guided_images_may_be_randomised_with_a_car_under_each_view(tmp_path):
+    path = os.path.join(GUIDED, "test", "01_desert.map")
+    made = {}
+    for name, extra in (("plain", {}), ("randomised", dict(randomize=3, ego_car=True))):
+        meta = dg.generate([path], ["desert"], str(tmp_path / name), views="none", straight_step=4.0,
+                           turn_step=4.0, max_samples=4, seed=5, log=lambda *_: None, **extra)
+        made[name] = meta
+    assert made["randomised"]["settings"]["randomize"] == 3 and made["randomised"]["settings"]["ego_car"] is True
+    assert "ego_car" not in made["plain"]["settings"]
+    import cv2
+    for i in range(4):  # the same views, labels and goals; other light
+        images = [cv2.imread(str(tmp_path / name / "images" / "guided_test_01_desert" / ("%06d.png" % i)))
+                  for name in ("plain", "randomised")]
+        assert float(abs(images[0].astype(float) - images[1].astype(float)).mean()) > 5
+    with open(tmp_path / "plain" / "labels.csv") as a, open(tmp_path / "randomised" / "labels.csv") as b:
+        assert list(csv.DictReader(a)) == list(csv.DictReader(b))
+
+
 def test_the_reference_policy_takes_every_commanded_exit(tmp_path):
     out = str(tmp_path / "eval")
     rc = dg.main(["evaluate", "--policy", "reference", "--maps", os.path.join(GUIDED, "test", "01_desert.map"),
