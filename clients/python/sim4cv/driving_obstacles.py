@@ -36,10 +36,8 @@ def cars_overlap(a: Tuple[float, float, float], b: Tuple[float, float, float], m
     dx, dy = b[0] - a[0], b[1] - a[1]
     axes = [(math.cos(yaw), math.sin(yaw)) for yaw in (a[2], b[2])]
     for ax, ay in axes + [(-s, c) for c, s in axes]:
-        reach = 0.0
-        for yaw in (a[2], b[2]):  # each rectangle's extent along the axis
-            c, s = math.cos(yaw), math.sin(yaw)
-            reach += half[0] * abs(ax * c + ay * s) + half[1] * abs(-ax * s + ay * c)
+        # both rectangles' extents along the axis: each one's length and width projected on it
+        reach = sum(half[0] * abs(ax * c + ay * s) + half[1] * abs(-ax * s + ay * c) for c, s in axes)
         if abs(dx * ax + dy * ay) > reach:
             return False
     return True

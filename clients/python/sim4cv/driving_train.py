@@ -202,8 +202,10 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
                     threads=threads, seed=seed)
     record_weights(settings, weights)
     # recorded only when not the default, so older models' settings still match
-    settings.update({k: v for k, v in (("input_norm", input_norm), ("augment", augment))
-                     if v != {"input_norm": "fixed", "augment": 0.0}[k]})
+    if input_norm != "fixed":
+        settings["input_norm"] = input_norm
+    if augment > 0:
+        settings["augment"] = augment
     if input_norm not in NORMALISATIONS:
         raise TrainError("--input-norm %s: one of %s" % (input_norm, ", ".join(NORMALISATIONS)))
     parts = [DrivingDataset(d, downscale, max_samples) for d in train_dirs]
@@ -252,8 +254,7 @@ def train(train_dir, val_dir: str, out: str, epochs: int = 50, batch: int = 32, 
         model.train()
         total, n = 0.0, 0
         for image, g, target in train_loader:
-            if augment > 0:
-                image = condition_augment(image, augment)
+            image = condition_augment(image, augment)  # the batch itself when augment is 0
             opt.zero_grad()
             outp = model(image, g) if goal else model(image)
             loss = torch.nn.functional.mse_loss(outp, target)
